@@ -1,0 +1,174 @@
+"""The ``vlref`` command.
+
+Exit codes: 0 success (``compare``: pass), 1 ``compare``/``golden verify`` failed, 2 bad input
+(the message names the file, the field and the reason, and nothing is written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from . import __version__
+from .errors import InputError
+
+# Buffers `vlref render` writes without --stages (EXR), besides final.png.
+MAIN_BUFFERS = ("final", "depth", "inscatter", "transmittance")
+
+
+def _progress(quiet: bool, total: int, desc: str):
+    """A tqdm bar on stderr shown only for work longer than about a second; None when quiet."""
+    if quiet:
+        return None
+    from tqdm import tqdm
+    return tqdm(total=total, desc=desc, unit="pass", file=sys.stderr, delay=1.0, leave=False)
+
+
+def _load(args) -> "Scene":  # noqa: F821
+    from .scene import load_scene
+    overrides = list(args.set or [])
+    if getattr(args, "technique", None):
+        overrides.append(f'render.technique="{args.technique}"')
+    return load_scene(args.scene, overrides)
+
+
+def cmd_render(args) -> int:
+    from .io import output_dir, save_render
+    from .render import render
+
+    scene = _load(args)
+    bar = _progress(args.quiet, 5, f"render {Path(scene.source).stem}")
+    result = render(scene, stages=args.stages, progress=(lambda name: bar.update(1)) if bar else None)
+    with output_dir(args.output) as out:
+        save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=scene.render.exposure)
+    if bar:
+        bar.close()
+    if not args.quiet:
+        total = sum(result.timings.values())
+        print(f"wrote {args.output} ({scene.render.width}x{scene.render.height}, "
+              f"{scene.render.technique}, {total:.2f} s)", file=sys.stderr)
+    return 0
+
+
+def cmd_scenes(args) -> int:
+    from .scene import bundled_scenes, load_scene
+    for name, path in bundled_scenes().items():
+        print(f"{name:16s} {load_scene(path).description}")
+    return 0
+
+
+def cmd_reference(args) -> int:
+    from .io import output_dir, write_exr, write_png
+    from .reference import render_reference
+    from .render import scene_hash
+
+    scene = _load(args)
+    res = render_reference(scene, rel_tol=args.rel_tol)
+    meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol)}
+    with output_dir(args.output) as out:
+        write_exr(out / "reference.exr", res.final, metadata=meta)
+        write_exr(out / "inscatter.exr", res.inscatter, metadata=meta)
+        write_exr(out / "error.exr", res.error, metadata=meta)
+        write_png(out / "reference.png", res.final, exposure=scene.render.exposure)
+    print(f"largest error estimate: {res.max_error:.3e} (target relative {args.rel_tol:g})")
+    return 0
+
+
+def cmd_bias(args) -> int:
+    from .io import output_dir
+    from .reference.bias import technique_bias
+
+    scene = _load(args)
+    steps = tuple(int(s) for s in args.steps.split(",")) if args.steps else None
+    report = technique_bias(scene, args.technique, steps) if steps else technique_bias(scene, args.technique)
+    print(report.summary())
+    if args.output:
+        with output_dir(args.output) as out:
+            report.save(out)
+    return 0
+
+
+def cmd_compare(args) -> int:
+    from .oracle.compare import main_compare
+    return main_compare(args.rest)
+
+
+def cmd_golden(args) -> int:
+    from .oracle.golden import main_golden
+    return main_golden(args.rest)
+
+
+def cmd_march(args) -> int:
+    from .oracle.port_buffers import main_march
+    return main_march(args.rest)
+
+
+def cmd_bench(args) -> int:
+    from .bench import main_bench
+    return main_bench(args.rest)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="vlref", description=__doc__.splitlines()[0] if __doc__ else None)
+    p.add_argument("--version", action="version", version=f"vlref {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+
+    def scene_args(sp, required=False):
+        if required:
+            sp.add_argument("scene", help="scene file (TOML/JSON) or bundled scene name")
+        else:
+            sp.add_argument("scene", nargs="?", default=None,
+                            help="scene file (TOML/JSON) or bundled scene name (default: the bundled default)")
+        sp.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
+                        help="override any scene field, e.g. render.width=320 or lights.0.intensity=20")
+
+    r = sub.add_parser("render", help="render a scene")
+    scene_args(r)
+    r.add_argument("-o", "--output", default="out", help="output folder (default: out)")
+    r.add_argument("--technique", help="shortcut for --set render.technique=NAME")
+    r.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.set_defaults(func=cmd_render)
+
+    s = sub.add_parser("scenes", help="list the bundled scenes")
+    s.set_defaults(func=cmd_scenes)
+
+    ref = sub.add_parser("reference", help="converged single-scattering reference with per-pixel error")
+    scene_args(ref, required=True)
+    ref.add_argument("-o", "--output", default="out_reference")
+    ref.add_argument("--rel-tol", type=float, default=1e-4, help="target relative error per pixel")
+    ref.set_defaults(func=cmd_reference)
+
+    b = sub.add_parser("bias", help="a technique's error against the reference, and how it falls with steps")
+    scene_args(b, required=True)
+    b.add_argument("--technique", required=True)
+    b.add_argument("--steps", help="comma-separated step counts, e.g. 4,8,16,32")
+    b.add_argument("-o", "--output", help="write the error images and report here")
+    b.set_defaults(func=cmd_bias)
+
+    for name, func, text in (("compare", cmd_compare, "compare two images (exit 0 pass, 1 fail, 2 bad input)"),
+                             ("golden", cmd_golden, "build or verify the golden suite"),
+                             ("march", cmd_march, "march and post passes on a port's own buffers"),
+                             ("bench", cmd_bench, "benchmarks")):
+        sp = sub.add_parser(name, help=text, add_help=False)
+        sp.add_argument("rest", nargs=argparse.REMAINDER)
+        sp.set_defaults(func=func)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help/--version
+        return int(exc.code or 0)
+    try:
+        return int(args.func(args))
+    except InputError as exc:
+        print(f"vlref: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,31 @@
+"""Henyey-Greenstein phase function.
+
+``p(cos θ; g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2})``  (Henyey & Greenstein 1941;
+DESIGN.md). ``cos θ = dot(d, l)`` with ``d`` the view-ray direction (camera -> scene) and ``l``
+the unit vector from the sample *toward* the light, so looking into the light with ``g > 0``
+is the forward peak. Mitsuba writes the same law with its direction vectors reversed
+(``wi`` points away from the scattering point); the port's ``cos θ`` is then ``-dot``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+INV_4PI = 1.0 / (4.0 * math.pi)
+
+
+@njit(cache=True, fastmath=False)
+def hg(cos_theta, g):
+    """Henyey-Greenstein phase value (1/sr) for one cosine; valid for |g| < 1."""
+    denom = 1.0 + g * g - 2.0 * g * cos_theta
+    return INV_4PI * (1.0 - g * g) / (denom * math.sqrt(denom))
+
+
+def hg_array(cos_theta, g):
+    """Vectorised NumPy Henyey-Greenstein for plots and tests."""
+    c = np.asarray(cos_theta, dtype=np.float64)
+    denom = 1.0 + g * g - 2.0 * g * c
+    return INV_4PI * (1.0 - g * g) / (denom * np.sqrt(denom))

@@ -1,0 +1,134 @@
+"""Render orchestration: scene -> camera -> geometry -> G-buffer -> lights -> technique -> buffers.
+
+``render(scene)`` is what the CLI, the notebooks, the reference and the oracle call. Each pass
+returns named float buffers; ``RenderResult.buffers`` gathers them under stable names:
+
+=================  ============================================================
+``final``          (H,W,3) the composited frame
+``inscatter``      (H,W,3) in-scattered radiance of the volumetric pass
+``transmittance``  (H,W)   view transmittance applied to the scene colour
+``scene_colour``   (H,W,3) the lit surfaces before the volumetric pass
+``depth``          (H,W)   linear eye depth in metres (inf = sky)
+``normal``, ``albedo`` (H,W,3); ``object_id`` (H,W) int32 (-1 = sky)
+=================  ============================================================
+
+With ``stages=True`` the technique's intermediate buffers and every shadow map are added.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import importlib
+import json
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable
+
+import numpy as np
+
+from . import __version__
+from .camera import Camera, camera_from_settings
+from .scene.model import Scene
+
+__all__ = ["Frame", "RenderResult", "render", "prepare_frame", "resolved", "scene_hash", "scene_settings_json"]
+
+
+def resolved(scene: Scene, name: str):
+    """``render.steps``/``sampling``/``resolution``, or the technique's default when the scene leaves it unset."""
+    value = getattr(scene.render, name)
+    if value is not None:
+        return value
+    params = scene.techniques.of(scene.render.technique)
+    default = getattr(params, name, None)
+    if default is None:
+        return {"steps": 32, "sampling": "none", "resolution": "full"}[name]
+    return default
+
+
+def scene_settings_json(scene: Scene) -> str:
+    """The scene as canonical JSON (sorted keys), without its source path."""
+    data = dataclasses.asdict(scene)
+    data.pop("source", None)
+    return json.dumps(data, sort_keys=True, separators=(",", ":"))
+
+
+def scene_hash(scene: Scene) -> str:
+    """sha256 of :func:`scene_settings_json` (file contents of meshes/cookies are named by path only)."""
+    return hashlib.sha256(scene_settings_json(scene).encode()).hexdigest()
+
+
+@dataclass
+class Frame:
+    """Everything the volumetric passes of one frame read, built once per render."""
+
+    scene: Scene
+    camera: Camera
+    geometry: Any
+    gbuffer: Any
+    lights: Any
+    scene_colour: np.ndarray
+    _shadow_maps: Any = field(default=None, repr=False)
+
+    def shadow_maps(self):
+        """The lights' shadow maps, built on first use (cascades depend on the camera)."""
+        if self._shadow_maps is None:
+            from .lights.shadowmaps import build_shadow_maps
+            self._shadow_maps = build_shadow_maps(self.scene, self.camera, self.geometry, self.lights)
+        return self._shadow_maps
+
+
+@dataclass
+class RenderResult:
+    buffers: dict[str, np.ndarray]
+    metadata: dict[str, str]
+    timings: dict[str, float]
+
+
+def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
+    """Camera, geometry, G-buffer, packed lights and scene colour of ``scene``."""
+    from .geometry import build_geometry, raycast
+    from .lights import pack_lights
+    from .lights.shading import scene_colour
+
+    tick = tick or (lambda name: None)
+    camera = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
+    geometry = build_geometry(scene)
+    tick("geometry")
+    gbuffer = raycast(scene, camera, geometry)
+    tick("raycast")
+    lights = pack_lights(scene)
+    colour = scene_colour(gbuffer, scene, geometry, lights)
+    tick("shading")
+    return Frame(scene, camera, geometry, gbuffer, lights, colour)
+
+
+def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None) -> RenderResult:
+    """Render ``scene`` with its ``render.technique``; see the module docstring for the buffers."""
+    timings: dict[str, float] = {}
+    last = [time.perf_counter()]
+
+    def tick(name: str) -> None:
+        now = time.perf_counter()
+        timings[name] = now - last[0]
+        last[0] = now
+        if progress is not None:
+            progress(name)
+
+    frame = prepare_frame(scene, tick)
+    technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
+    out = technique.render(scene, frame)
+    tick("volumetrics")
+
+    g = frame.gbuffer
+    buffers = {"final": out["final"], "inscatter": out["inscatter"], "transmittance": out["transmittance"],
+               "scene_colour": frame.scene_colour, "depth": g.depth, "normal": g.normal, "albedo": g.albedo,
+               "object_id": g.object_id}
+    if stages:
+        buffers.update({k: v for k, v in out.items() if k not in buffers})
+        if frame._shadow_maps is not None:
+            buffers.update(frame._shadow_maps.buffers())
+    metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
+                "technique": scene.render.technique, "settings": scene_settings_json(scene),
+                "scene_file": scene.source}
+    return RenderResult(buffers, metadata, timings)
