@@ -25,7 +25,7 @@ def _progress(quiet: bool, total: int, desc: str):
     return tqdm(total=total, desc=desc, unit="pass", file=sys.stderr, delay=1.0, leave=False)
 
 
-def _load(args) -> "Scene":  # noqa: F821
+def _load(args):
     from .scene import load_scene
     overrides = list(args.set or [])
     if getattr(args, "technique", None):
@@ -89,11 +89,6 @@ def cmd_bias(args) -> int:
     return 0
 
 
-def cmd_compare(args) -> int:
-    from .oracle.compare import main_compare
-    return main_compare(args.rest)
-
-
 def cmd_golden(args) -> int:
     from .oracle.golden import main_golden
     return main_golden(args.rest)
@@ -147,8 +142,12 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("-o", "--output", help="write the error images and report here")
     b.set_defaults(func=cmd_bias)
 
-    for name, func, text in (("compare", cmd_compare, "compare two images (exit 0 pass, 1 fail, 2 bad input)"),
-                             ("golden", cmd_golden, "build or verify the golden suite"),
+    from .oracle.compare import add_arguments, run_compare
+    c = sub.add_parser("compare", help="compare two images (exit 0 pass, 1 fail, 2 bad input)")
+    add_arguments(c)
+    c.set_defaults(func=run_compare)
+
+    for name, func, text in (("golden", cmd_golden, "build or verify the golden suite"),
                              ("march", cmd_march, "march and post passes on a port's own buffers"),
                              ("bench", cmd_bench, "benchmarks")):
         sp = sub.add_parser(name, help=text, add_help=False)

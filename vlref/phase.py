@@ -14,14 +14,17 @@ import math
 import numpy as np
 from numba import njit
 
+from .numeric import cast
+
 INV_4PI = 1.0 / (4.0 * math.pi)
 
 
 @njit(cache=True, fastmath=False)
 def hg(cos_theta, g):
-    """Henyey-Greenstein phase value (1/sr) for one cosine; valid for |g| < 1."""
-    denom = 1.0 + g * g - 2.0 * g * cos_theta
-    return INV_4PI * (1.0 - g * g) / (denom * math.sqrt(denom))
+    """Henyey-Greenstein phase value (1/sr) for one cosine, in the precision of ``g``; valid for |g| < 1."""
+    one = cast(g, 1.0)
+    denom = one + g * g - cast(g, 2.0) * g * cos_theta
+    return cast(g, INV_4PI) * (one - g * g) / (denom * math.sqrt(denom))
 
 
 def hg_array(cos_theta, g):

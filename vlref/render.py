@@ -23,6 +23,7 @@ import importlib
 import json
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
@@ -46,15 +47,31 @@ def resolved(scene: Scene, name: str):
     return default
 
 
+def _portable(node: Any) -> Any:
+    """Replace every file path (``path`` keys) by its base name and content hash, recursively."""
+    if isinstance(node, dict):
+        out = {}
+        for key, value in node.items():
+            if key == "path" and isinstance(value, str) and value:
+                p = Path(value)
+                out[key] = {"name": p.name, "sha256": hashlib.sha256(p.read_bytes()).hexdigest()}
+            else:
+                out[key] = _portable(value)
+        return out
+    if isinstance(node, (list, tuple)):
+        return [_portable(v) for v in node]
+    return node
+
+
 def scene_settings_json(scene: Scene) -> str:
-    """The scene as canonical JSON (sorted keys), without its source path."""
+    """The scene as canonical JSON (sorted keys), machine-independent: no source path, files by content."""
     data = dataclasses.asdict(scene)
     data.pop("source", None)
-    return json.dumps(data, sort_keys=True, separators=(",", ":"))
+    return json.dumps(_portable(data), sort_keys=True, separators=(",", ":"))
 
 
 def scene_hash(scene: Scene) -> str:
-    """sha256 of :func:`scene_settings_json` (file contents of meshes/cookies are named by path only)."""
+    """sha256 of :func:`scene_settings_json`: equal scenes hash equal on every machine."""
     return hashlib.sha256(scene_settings_json(scene).encode()).hexdigest()
 
 
@@ -68,14 +85,25 @@ class Frame:
     gbuffer: Any
     lights: Any
     scene_colour: np.ndarray
-    _shadow_maps: Any = field(default=None, repr=False)
+    _shadow_maps: dict = field(default_factory=dict, repr=False)
 
-    def shadow_maps(self):
-        """The lights' shadow maps, built on first use (cascades depend on the camera)."""
-        if self._shadow_maps is None:
+    def shadow_maps(self, shadow_filter: str | None = None):
+        """The lights' shadow maps, built on first use (cascades depend on the camera).
+
+        ``shadow_filter`` replaces every shadowed light's lookup filter (``hard``, ``pcf``, ``exact``):
+        techniques fix the filter their source uses (Vos and VolumetricLights: one point sample).
+        """
+        if shadow_filter not in self._shadow_maps:
             from .lights.shadowmaps import build_shadow_maps
-            self._shadow_maps = build_shadow_maps(self.scene, self.camera, self.geometry, self.lights)
-        return self._shadow_maps
+            scene = self.scene
+            if shadow_filter is not None:
+                lights = tuple(dataclasses.replace(l, shadows=dataclasses.replace(l.shadows, filter=shadow_filter))
+                               if l.shadows is not None else l for l in scene.lights)
+                if lights == scene.lights:
+                    return self.shadow_maps()
+                scene = scene.replace(lights=lights)
+            self._shadow_maps[shadow_filter] = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
+        return self._shadow_maps[shadow_filter]
 
 
 @dataclass
@@ -126,8 +154,8 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
                "object_id": g.object_id}
     if stages:
         buffers.update({k: v for k, v in out.items() if k not in buffers})
-        if frame._shadow_maps is not None:
-            buffers.update(frame._shadow_maps.buffers())
+        for maps in frame._shadow_maps.values():
+            buffers.update(maps.buffers())
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}

@@ -1,0 +1,18 @@
+"""Geometry: analytic primitives, OBJ meshes, the triangle BVH, packed scene geometry, G-buffer ray casting.
+
+    primitives.py      ray/plane, sphere, box, cylinder, triangle intersection (njit)
+    obj.py             Wavefront OBJ loading and the mesh-object transform
+    bvh.py             binned-SAH BVH build and traversal
+    scene_geometry.py  build_geometry -> Geometry (the "geo" tuple), closest_hit,
+                       shadow_transmittance, trace_distances
+    raycast.py         raycast -> GBuffer (depth, distance, position, normal, albedo, emission, object_id)
+"""
+
+from .bvh import Bvh, build_bvh
+from .obj import load_obj, transform_vertices, write_obj
+from .raycast import GBuffer, raycast
+from .scene_geometry import (SHADOW_EPS, GeoArrays, Geometry, build_geometry, closest_hit, shadow_transmittance,
+                             trace_distances)
+
+__all__ = ["Bvh", "build_bvh", "load_obj", "transform_vertices", "write_obj", "GBuffer", "raycast", "SHADOW_EPS",
+           "GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance", "trace_distances"]

@@ -1,0 +1,85 @@
+"""The `vlref` command end to end: outputs, exit codes, and nothing written on bad input."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from vlref import __version__
+from vlref.cli import main
+from vlref.io import read_exr, read_image
+
+SMALL = ["--set", "render.width=48", "--set", "render.height=27", "--set", "render.steps=8"]
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert __version__ in capsys.readouterr().out
+
+
+def test_scenes_lists_every_bundled_scene_with_a_description(capsys):
+    assert main(["scenes"]) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert len(lines) >= 10
+    assert all(len(line.split(None, 1)) == 2 for line in lines)
+
+
+def test_render_default_scene_writes_final_png_and_depth(tmp_path):
+    out = tmp_path / "out"
+    assert main(["render", "-o", str(out), "-q", *SMALL]) == 0
+    for name in ("final.exr", "final.png", "depth.exr", "inscatter.exr", "transmittance.exr"):
+        assert (out / name).is_file(), name
+    channels, meta = read_exr(out / "final.exr")
+    assert set(channels) == {"R", "G", "B"}
+    assert meta["vlref_version"] == __version__ and len(meta["scene_hash"]) == 64
+    final = read_image(out / "final.exr")
+    assert final.shape == (27, 48, 3) and np.isfinite(final).all() and final.max() > 0
+    depth = read_image(out / "depth.exr")[..., 0]
+    assert depth.shape == (27, 48) and (depth > 0).all()
+
+
+def test_render_is_deterministic(tmp_path):
+    for d in ("a", "b"):
+        assert main(["render", "pillars", "-o", str(tmp_path / d), "-q", *SMALL]) == 0
+    a = (tmp_path / "a" / "final.exr").read_bytes()
+    b = (tmp_path / "b" / "final.exr").read_bytes()
+    assert a == b
+
+
+def test_stages_write_shadow_maps_and_pass_buffers(tmp_path):
+    out = tmp_path / "s"
+    assert main(["render", "pillars", "-o", str(out), "-q", "--stages", *SMALL]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert any(n.startswith("shadow_") for n in names), names
+    assert "scene_colour.exr" in names
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["render", "no_such_scene"], "no_such_scene"),
+    (["render", "pillars", "--set", "lights.0.spot_angel=30"], "lights[0].spot_angel: unknown key, did you mean"),
+    (["render", "pillars", "--set", "medium.anisotropy=1.5"], "medium.anisotropy: must be < 1.0"),
+    (["render", "pillars", "--set", "render.width=0"], "render.width: must be >= 1"),
+    (["render", "pillars", "--set", "lights.0.direction=[0,0,0]"], "lights[0].direction: zero-length"),
+    (["render", "pillars", "--set", "lights.7.range=1"], "lights[7]"),
+    (["render", "pillars", "--technique", "raytraced"], "render.technique: must be one of"),
+])
+def test_bad_input_exits_2_names_file_key_reason_and_writes_nothing(tmp_path, capsys, args, needle):
+    out = tmp_path / "o"
+    assert main([*args, "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert needle in err
+    assert not out.exists()
+
+
+def test_bad_scene_file_names_the_file(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[[lights]]\ntype = 'point'\nrange = -2\n")
+    assert main(["render", str(bad), "-o", str(tmp_path / "o"), "-q"]) == 2
+    assert f"{bad}: lights[0].range: must be > 0.0" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+def test_console_script_entry_point_runs():
+    r = subprocess.run([sys.executable, "-m", "vlref", "--version"], capture_output=True, text=True)
+    assert r.returncode == 0 and __version__ in r.stdout

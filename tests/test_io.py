@@ -1,0 +1,322 @@
+"""vlref.io: EXR/PNG/NPY/NPZ writers and checked readers, atomic writes, all-or-nothing output folders."""
+
+import json
+import os
+import types
+
+import imageio.v3 as iio
+import numpy as np
+import OpenEXR
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
+
+from vlref import __version__
+from vlref import io as vio
+from vlref.errors import InputError
+
+
+def _awkward_float32(rng, shape):
+    """float32 values over the whole exponent range, with signs, subnormals, zeros and extremes."""
+    mant = rng.standard_normal(shape)
+    expo = rng.uniform(-45, 38, shape)
+    a = (mant * 10.0 ** expo).astype(np.float32)
+    flat = a.reshape(-1)
+    special = np.array([0.0, -0.0, np.finfo(np.float32).max, -np.finfo(np.float32).max,
+                        np.finfo(np.float32).tiny, np.float32(1.4e-45), 1.0, np.pi, np.inf, -np.inf],
+                       dtype=np.float32)
+    flat[:special.size] = special
+    return a
+
+
+def _no_stray_files(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+# --------------------------------------------------------------------------- EXR
+
+def test_exr_round_trip_is_bit_exact(tmp_path):
+    rng = np.random.default_rng(1)
+    img = _awkward_float32(rng, (24, 32, 3))
+    path = vio.write_exr(tmp_path / "a.exr", img)
+    channels, _ = vio.read_exr(path)
+    assert sorted(channels) == ["B", "G", "R"]
+    for i, name in enumerate("RGB"):
+        assert channels[name].dtype == np.float32
+        np.testing.assert_array_equal(channels[name].view(np.uint32), img[:, :, i].view(np.uint32))
+    back = vio.read_image(path)
+    np.testing.assert_array_equal(back.view(np.uint32), img.view(np.uint32))
+
+
+@settings(max_examples=25)
+@given(hnp.arrays(np.float32, hnp.array_shapes(min_dims=3, max_dims=3, min_side=1, max_side=9),
+                  elements=st.floats(width=32, allow_nan=False)))
+def test_exr_round_trip_any_float32_array(tmp_path_factory, img):
+    c = img.shape[2]
+    names = tuple(f"c{i}" for i in range(c))
+    path = vio.write_exr(tmp_path_factory.mktemp("h") / "h.exr", img, channels=names)
+    back = vio.read_image(path)
+    np.testing.assert_array_equal(back.view(np.uint32), img.view(np.uint32))
+
+
+def test_exr_row_zero_is_top_and_float64_rounds_to_nearest(tmp_path):
+    img = np.linspace(0.0, 1.0, 12 * 7).reshape(12, 7) + 1e-9  # float64, not float32-representable
+    vio.write_exr(tmp_path / "g.exr", img)
+    back = vio.read_image(tmp_path / "g.exr")
+    assert back.shape == (12, 7, 1)
+    np.testing.assert_array_equal(back[:, :, 0], img.astype(np.float32))
+    assert back[0, 0, 0] < back[-1, -1, 0]  # first row written is the first row read
+
+
+def test_exr_metadata_round_trip(tmp_path):
+    settings = {"render": {"width": 32, "height": 24}, "medium": {"g": 0.7}}
+    vio.write_exr(tmp_path / "m.exr", np.ones((4, 5, 3)), metadata={"scene_hash": "abc123", "settings": settings})
+    _, meta = vio.read_exr(tmp_path / "m.exr")
+    assert meta["vlref_version"] == __version__
+    assert meta["scene_hash"] == "abc123"
+    assert json.loads(meta["settings"]) == settings
+    assert meta["vlref_channels"] == "R,G,B"
+
+
+def test_exr_channel_naming(tmp_path):
+    h, w = 3, 4
+    base = np.arange(h * w, dtype=np.float32).reshape(h, w)
+    vio.write_exr(tmp_path / "y.exr", base)
+    assert list(vio.read_exr(tmp_path / "y.exr")[0]) == ["Y"]
+    vio.write_exr(tmp_path / "z.exr", base, channels="Z")
+    assert list(vio.read_exr(tmp_path / "z.exr")[0]) == ["Z"]
+    rgba = np.stack([base + k for k in range(4)], axis=-1)
+    vio.write_exr(tmp_path / "rgba.exr", rgba)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "rgba.exr"), rgba)  # back in R,G,B,A order
+    # arbitrary names keep the written order (EXR itself sorts names)
+    five = np.stack([base * (k + 1) for k in range(5)], axis=-1)
+    names = ("zeta", "alpha", "mid", "C10", "C2")
+    vio.write_exr(tmp_path / "five.exr", five, channels=names)
+    chans, _ = vio.read_exr(tmp_path / "five.exr")
+    assert set(chans) == set(names)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "five.exr"), five)
+    # a dict writes its keys
+    vio.write_exr(tmp_path / "d.exr", {"depth": base, "R": base + 1})
+    chans, _ = vio.read_exr(tmp_path / "d.exr")
+    np.testing.assert_array_equal(chans["depth"], base)
+    np.testing.assert_array_equal(chans["R"], base + 1)
+    with pytest.raises(ValueError):
+        vio.write_exr(tmp_path / "bad.exr", five)  # 5 channels need names
+    with pytest.raises(ValueError):
+        vio.write_exr(tmp_path / "bad.exr", rgba, channels=("R", "G"))
+
+
+def test_exr_integers_must_be_exact_in_float32(tmp_path):
+    ids = np.array([[-1, 0], [7, 2 ** 24]], dtype=np.int32)
+    vio.write_exr(tmp_path / "ids.exr", ids)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "ids.exr")[:, :, 0], ids.astype(np.float32))
+    with pytest.raises(ValueError, match="2\\*\\*24"):
+        vio.write_exr(tmp_path / "big.exr", np.array([[2 ** 24 + 1]], dtype=np.int64))
+    with pytest.raises(ValueError, match="standard EXR attribute"):
+        vio.write_exr(tmp_path / "m.exr", ids, metadata={"compression": "none"})
+
+
+def test_exr_half_is_widened_and_uint_rejected(tmp_path):
+    half = (np.arange(12).reshape(3, 4) / 7).astype(np.float16)
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {"Y": half}) as f:
+        f.write(str(tmp_path / "h.exr"))
+    chans, _ = vio.read_exr(tmp_path / "h.exr")
+    assert chans["Y"].dtype == np.float32
+    np.testing.assert_array_equal(chans["Y"], half.astype(np.float32))
+    with OpenEXR.File(header, {"id": np.arange(12, dtype=np.uint32).reshape(3, 4)}) as f:
+        f.write(str(tmp_path / "u.exr"))
+    with pytest.raises(InputError, match="wrong dtype uint32") as exc:
+        vio.read_exr(tmp_path / "u.exr")
+    assert exc.value.path == "id"
+
+
+# --------------------------------------------------------------------------- PNG
+
+def test_png_preview_written_readable_and_tone_mapped(tmp_path):
+    values = np.array([[0.0, 0.18, 1.0, 1e9]], dtype=np.float64)
+    img = np.repeat(values[:, :, None], 3, axis=2)
+    vio.write_png(tmp_path / "p.png", img, exposure=1.0)
+    rgb = iio.imread(tmp_path / "p.png")
+    assert rgb.shape == (1, 4, 3) and rgb.dtype == np.uint8
+
+    def expected(v):  # ACES fit (Narkowicz 2015), then sRGB OETF, written out independently
+        y = min(max(v * (2.51 * v + 0.03) / (v * (2.43 * v + 0.59) + 0.14), 0.0), 1.0)
+        s = 12.92 * y if y <= 0.0031308 else 1.055 * y ** (1 / 2.4) - 0.055
+        return round(255 * s)
+
+    assert [int(c) for c in rgb[0, :, 0]] == [expected(0.0), expected(0.18), expected(1.0), 255]
+    # exposure scales before the curve
+    vio.write_png(tmp_path / "e.png", img, exposure=2.0)
+    assert int(iio.imread(tmp_path / "e.png")[0, 1, 0]) == expected(0.36)
+    # grey input, NaN and negative values give valid pixels
+    vio.write_png(tmp_path / "g.png", np.array([[np.nan, -3.0, np.inf]]))
+    assert [int(c) for c in iio.imread(tmp_path / "g.png")[0, :, 1]] == [0, 0, 255]
+
+
+def test_srgb8_is_monotonic():
+    v = np.linspace(0.0, 20.0, 2001)[None, :]
+    out = vio.srgb8(v)[0, :, 0].astype(int)
+    assert out[0] == 0 and out[-1] == 255 and np.all(np.diff(out) >= 0)
+
+
+def test_read_png_scales_code_values(tmp_path):
+    codes = np.array([[0, 51, 255]], dtype=np.uint8)
+    iio.imwrite(tmp_path / "c.png", codes)
+    np.testing.assert_allclose(vio.read_image(tmp_path / "c.png")[:, :, 0], codes / 255.0, rtol=1e-7)
+    wide = np.array([[0, 65535]], dtype=np.uint16)
+    iio.imwrite(tmp_path / "w.png", wide)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "w.png")[:, :, 0], [[0.0, 1.0]])
+
+
+# --------------------------------------------------------------------------- NPY / NPZ and reader errors
+
+def test_npy_npz_round_trip(tmp_path):
+    a = np.random.default_rng(2).random((5, 6, 2))
+    vio.write_npy(tmp_path / "a.npy", a)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "a.npy"), a)
+    assert vio.read_image(tmp_path / "a.npy").dtype == np.float64
+    vio.write_npz(tmp_path / "b.npz", {"x": a, "y": a[:, :, 0].astype(np.float16)})
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "b.npz", key="x"), a)
+    y = vio.read_image(tmp_path / "b.npz", key="y")
+    assert y.shape == (5, 6, 1) and y.dtype == np.float32
+    vio.write_npz(tmp_path / "one.npz", {"only": a}, compressed=False)
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "one.npz"), a)
+
+
+@pytest.mark.parametrize("setup, kwargs, field, reason", [
+    (lambda p: np.save(p / "i.npy", np.zeros((3, 4), np.int32)), {}, "dtype", "wrong dtype int32"),
+    (lambda p: np.save(p / "i.npy", np.zeros((3, 4), bool)), {}, "dtype", "wrong dtype bool"),
+    (lambda p: np.save(p / "i.npy", np.array([[0.0, np.nan]])), {}, "values", "1 NaN value(s) present"),
+    (lambda p: np.save(p / "i.npy", np.array([[0.0, np.inf]])), {"allow_inf": False}, "values", "infinite"),
+    (lambda p: np.save(p / "i.npy", np.zeros((2, 3, 2))), {"channels": 3}, "channels",
+     "wrong channel count 2 (expected 3)"),
+    (lambda p: np.save(p / "i.npy", np.zeros(5)), {}, "shape", "wrong shape (5,)"),
+    (lambda p: np.save(p / "i.npy", np.zeros((2, 2, 2, 2))), {}, "shape", "wrong shape"),
+    (lambda p: np.save(p / "i.npy", np.zeros((0, 3))), {}, "shape", "wrong shape"),
+    (lambda p: (p / "i.npy").write_bytes(b"not numpy"), {}, "", "unreadable NPY"),
+])
+def test_reader_errors(tmp_path, setup, kwargs, field, reason):
+    setup(tmp_path)
+    with pytest.raises(InputError) as exc:
+        vio.read_image(tmp_path / "i.npy", **kwargs)
+    assert exc.value.path == field
+    assert reason in exc.value.reason
+    assert str(tmp_path / "i.npy") in str(exc.value)
+
+
+def test_reader_error_cases_by_file_kind(tmp_path):
+    (tmp_path / "c.exr").write_bytes(b"\x76\x2f\x31\x01garbage")
+    with pytest.raises(InputError, match="unreadable EXR"):
+        vio.read_image(tmp_path / "c.exr")
+    (tmp_path / "c.png").write_bytes(b"\x89PNG\r\n\x1a\nbroken")
+    with pytest.raises(InputError, match="unreadable PNG"):
+        vio.read_image(tmp_path / "c.png")
+    with pytest.raises(InputError, match="file not found"):
+        vio.read_image(tmp_path / "missing.exr")
+    (tmp_path / "x.tif").write_bytes(b"")
+    with pytest.raises(InputError, match="unsupported file type '.tif'"):
+        vio.read_image(tmp_path / "x.tif")
+    np.savez(tmp_path / "two.npz", a=np.zeros((2, 2)), b=np.zeros((2, 2)))
+    with pytest.raises(InputError, match="holds arrays a, b"):
+        vio.read_image(tmp_path / "two.npz")
+    with pytest.raises(InputError, match="no such array") as exc:
+        vio.read_image(tmp_path / "two.npz", key="c")
+    assert exc.value.path == "c"
+    vio.write_exr(tmp_path / "n.exr", np.array([[1.0, np.nan]]))
+    with pytest.raises(InputError, match="NaN"):
+        vio.read_image(tmp_path / "n.exr")
+    vio.write_exr(tmp_path / "inf.exr", np.array([[1.0, np.inf]]))
+    with pytest.raises(InputError, match="infinite value"):
+        vio.read_image(tmp_path / "inf.exr", allow_inf=False)
+    assert np.isinf(vio.read_image(tmp_path / "inf.exr")).sum() == 1  # inf is legal by default (sky depth)
+
+
+# --------------------------------------------------------------------------- atomicity
+
+def test_failed_exr_write_leaves_nothing(tmp_path, monkeypatch):
+    def boom(self, target):
+        target.write(b"partial bytes")
+        raise RuntimeError("disk full")
+    monkeypatch.setattr(OpenEXR.File, "write", boom)
+    with pytest.raises(RuntimeError, match="disk full"):
+        vio.write_exr(tmp_path / "a.exr", np.zeros((2, 2)))
+    assert _no_stray_files(tmp_path) == []
+
+
+def test_failed_overwrite_keeps_the_old_file(tmp_path, monkeypatch):
+    path = vio.write_npy(tmp_path / "a.npy", np.arange(4.0))
+    before = path.read_bytes()
+
+    def boom(fh, arr, allow_pickle=False):
+        fh.write(b"\x93NUMPY partial")
+        raise KeyboardInterrupt
+    monkeypatch.setattr(np, "save", boom)
+    with pytest.raises(KeyboardInterrupt):
+        vio.write_npy(path, np.zeros(4))
+    assert path.read_bytes() == before
+    assert _no_stray_files(tmp_path) == ["a.npy"]
+
+
+def test_written_files_have_ordinary_permissions(tmp_path):
+    path = vio.write_png(tmp_path / "p.png", np.zeros((2, 2, 3)))
+    umask = os.umask(0)
+    os.umask(umask)
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask
+
+
+def test_output_dir_moves_files_in_on_success(tmp_path):
+    out = tmp_path / "a" / "b" / "out"
+    with vio.output_dir(out) as tmp:
+        assert tmp != out and not out.exists()
+        vio.write_npy(tmp / "x.npy", np.zeros(3))
+        (tmp / "sub").mkdir()
+        vio.write_text(tmp / "sub" / "note.txt", "hello")
+    assert sorted(p.name for p in out.iterdir()) == ["sub", "x.npy"]
+    assert (out / "sub" / "note.txt").read_text() == "hello"
+    assert _no_stray_files(out.parent) == ["out"]
+
+
+def test_output_dir_leaves_nothing_on_failure(tmp_path):
+    out = tmp_path / "new" / "out"
+    with pytest.raises(ValueError):
+        with vio.output_dir(out) as tmp:
+            vio.write_npy(tmp / "x.npy", np.zeros(3))
+            raise ValueError("render failed")
+    assert _no_stray_files(tmp_path) == []  # not even the missing parent was created
+    existing = tmp_path / "keep"
+    existing.mkdir()
+    (existing / "old.txt").write_text("old")
+    with pytest.raises(ValueError):
+        with vio.output_dir(existing) as tmp:
+            vio.write_text(tmp / "old.txt", "new")
+            raise ValueError
+    assert (existing / "old.txt").read_text() == "old"
+    assert _no_stray_files(tmp_path) == ["keep"]
+    (tmp_path / "file").write_text("")
+    with pytest.raises(InputError, match="not a folder"):
+        with vio.output_dir(tmp_path / "file"):
+            pass
+
+
+def test_save_buffers_and_save_render(tmp_path):
+    rng = np.random.default_rng(3)
+    buffers = {"final": rng.random((4, 6, 3)), "depth": np.where(rng.random((4, 6)) < 0.3, np.inf, 5.0),
+               "object_id": np.full((4, 6), -1, np.int32)}
+    paths = vio.save_buffers(tmp_path, buffers, {"scene_hash": "h"})
+    assert sorted(p.name for p in paths) == ["depth.exr", "final.exr", "object_id.exr"]
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "depth.exr")[:, :, 0],
+                                  buffers["depth"].astype(np.float32))
+    assert vio.read_exr(tmp_path / "final.exr")[1]["scene_hash"] == "h"
+    checked = tmp_path / "checked"
+    checked.mkdir()
+    with pytest.raises(ValueError, match="safe file name"):
+        vio.save_buffers(checked, {"ok": np.zeros((2, 2)), "../evil": np.zeros((2, 2))})
+    assert _no_stray_files(checked) == []  # validated before the first write
+    result = types.SimpleNamespace(buffers=buffers, metadata={"technique": "physical"})
+    out = tmp_path / "render"
+    out.mkdir()
+    written = vio.save_render(out, result, stages=False, main=("final", "depth", "inscatter"), exposure=1.0)
+    assert sorted(p.name for p in written) == ["depth.exr", "final.exr", "final.png"]
+    assert vio.read_exr(out / "final.exr")[1]["technique"] == "physical"

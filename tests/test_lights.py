@@ -1,0 +1,151 @@
+"""Light models: attenuation and cone laws against their formulas, cookies, packing, incidence."""
+
+import math
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from vlref.lights import pack_lights
+from vlref.lights.attenuation import INVERSE_SQUARE, MIN_DISTANCE, UNITY, WINDOWED, distance_attenuation
+from vlref.lights.cone import CONE_LINEAR, CONE_SMOOTHSTEP, CONE_UNITY, cone_falloff, default_inner_angle
+from vlref.lights.cookies import load_cookie, sample_texture, spot_cookie_uv
+from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B
+from vlref.lights.shading import light_incidence
+from vlref.scene.model import Cookie, Light, Scene
+
+NO_LUT = np.zeros((0, 0))
+R = 10.0
+
+
+@pytest.mark.parametrize("d", [0.001, 0.3, 1.0, 4.0, 9.99, 10.0, 12.0])
+def test_attenuation_laws_match_formulas(d):
+    d2, inv = d * d, 1.0 / (R * R)
+    inside = d < R
+    inv_sq = 1.0 / max(d2, MIN_DISTANCE ** 2)
+    assert distance_attenuation(INVERSE_SQUARE, d2, inv, NO_LUT) == pytest.approx(inv_sq * inside, rel=1e-14)
+    u = d2 / R ** 2
+    folk = 1.0 / (1.0 + 25.0 * u) * min(max(5.0 * (1.0 - math.sqrt(u)), 0.0), 1.0)
+    assert distance_attenuation(UNITY, d2, inv, NO_LUT) == pytest.approx(folk * inside, rel=1e-14, abs=1e-300)
+    win = min(max(1.0 - (d / R) ** 4, 0.0), 1.0) ** 2 * inv_sq
+    assert distance_attenuation(WINDOWED, d2, inv, NO_LUT) == pytest.approx(win * inside, rel=1e-12, abs=1e-300)
+
+
+def test_unity_lut_is_sampled_bilinearly_with_clamp():
+    lut = np.array([[1.0, 0.5, 0.25, 0.0]])  # texel centres at u = 0.125, 0.375, 0.625, 0.875
+    inv = 1.0 / R ** 2
+    for u, want in [(0.05, 1.0), (0.125, 1.0), (0.25, 0.75), (0.5, 0.375), (0.8, 0.075)]:
+        assert distance_attenuation(UNITY, u * R * R, inv, lut) == pytest.approx(want, abs=1e-12)
+
+
+def test_attenuation_float32_stays_float32():
+    f = np.float32
+    out = distance_attenuation(WINDOWED, f(4.0), f(0.01), np.zeros((0, 0), np.float32))
+    assert isinstance(out, float) and out == pytest.approx(0.25 * (1 - 0.0016) ** 2, rel=1e-6)
+
+
+def _cone(law, cos_t, outer_deg, inner_deg):
+    co, ci = math.cos(math.radians(outer_deg / 2)), math.cos(math.radians(inner_deg / 2))
+    a = 1.0 / max(0.001, ci - co)
+    return cone_falloff(law, cos_t, co, ci, math.radians(outer_deg / 2), math.radians(inner_deg / 2), a, -co * a)
+
+
+@pytest.mark.parametrize("angle", [0.0, 5.0, 12.0, 17.0, 19.9, 20.0, 25.0, 60.0])
+def test_cone_laws_match_formulas(angle):
+    outer, inner = 40.0, 24.0  # full angles: half-angles 20 and 12 degrees
+    c = math.cos(math.radians(angle))
+    co, ci = math.cos(math.radians(20)), math.cos(math.radians(12))
+    x = min(max((c - co) / (ci - co), 0.0), 1.0)
+    assert _cone(CONE_SMOOTHSTEP, c, outer, inner) == pytest.approx(x * x * (3 - 2 * x), abs=1e-12)
+    lin = min(max((20.0 - angle) / (20.0 - 12.0), 0.0), 1.0)
+    assert _cone(CONE_LINEAR, c, outer, inner) == pytest.approx(lin, abs=1e-9)
+    unity = min(max((c - co) / (ci - co), 0.0), 1.0) ** 2
+    assert _cone(CONE_UNITY, c, outer, inner) == pytest.approx(unity, abs=1e-12)
+
+
+def test_cone_laws_are_zero_at_and_beyond_the_outer_angle_and_step_when_inner_equals_outer():
+    c_out = math.cos(math.radians(15))
+    for law in (CONE_UNITY, CONE_LINEAR, CONE_SMOOTHSTEP):
+        assert _cone(law, c_out, 30.0, 20.0) == 0.0
+        assert _cone(law, math.cos(math.radians(16)), 30.0, 20.0) == 0.0
+        assert _cone(law, 1.0, 30.0, 20.0) == 1.0
+    assert _cone(CONE_SMOOTHSTEP, math.cos(math.radians(14.9)), 30.0, 30.0) == 1.0
+    assert _cone(CONE_LINEAR, math.cos(math.radians(14.9)), 30.0, 30.0) == 1.0
+
+
+def test_default_inner_angles():
+    assert default_inner_angle("linear", 40.0) == pytest.approx(30.0)
+    assert default_inner_angle("smoothstep", 40.0) == pytest.approx(30.0)
+    assert default_inner_angle("smoothstep", 6.0) == 0.0
+    want = math.degrees(2 * math.atan(math.tan(math.radians(20)) * 46 / 64))
+    assert default_inner_angle("unity", 40.0) == pytest.approx(want)
+    packed = pack_lights(Scene(lights=(Light(type="spot", spot_angle=40.0, cone="unity"),)))
+    ci, co = packed.floats[0, F_COS_INNER], packed.floats[0, F_COS_OUTER]
+    assert ci == pytest.approx(math.cos(math.radians(want / 2)))
+    assert packed.floats[0, F_UNITY_A] == pytest.approx(1 / (ci - co))
+    assert packed.floats[0, F_UNITY_B] == pytest.approx(-co / (ci - co))
+
+
+def _cookie_file(tmp_path, img, name="c.png"):
+    path = tmp_path / name
+    iio.imwrite(path, img)
+    return str(path)
+
+
+def test_cookie_load_flips_rows_and_picks_channels(tmp_path):
+    img = np.zeros((2, 3, 4), dtype=np.uint8)
+    img[0, :, 0] = 255  # top row red
+    img[:, :, 3] = 51
+    path = _cookie_file(tmp_path, img)
+    rgb = load_cookie(Cookie(path=path, channel="rgb"), "s", "k")
+    assert rgb.shape == (2, 3, 3)
+    np.testing.assert_array_equal(rgb[1, :, 0], 1.0)  # top of the picture is the last row (v = 1)
+    np.testing.assert_array_equal(rgb[0, :, 0], 0.0)
+    np.testing.assert_allclose(load_cookie(Cookie(path=path, channel="alpha"), "s", "k"), 0.2)
+    lum = load_cookie(Cookie(path=path, channel="luminance"), "s", "k")
+    np.testing.assert_allclose(lum[1, :, 1], 0.2126)
+
+
+def test_texture_sampling_filters_and_wraps():
+    tex = np.array([[0.0, 1.0], [2.0, 3.0]])  # (h, w) = (2, 2), row 0 = v < 0.5
+    texels = np.repeat(tex.reshape(-1, 1), 3, axis=1)
+    s = lambda u, v, rep, near: sample_texture(texels, 0, 2, 2, rep, near, u, v)[0]  # noqa: E731
+    assert s(0.5, 0.5, False, False) == pytest.approx(1.5)
+    assert s(0.25, 0.25, False, False) == pytest.approx(0.0)
+    assert s(0.0, 0.25, False, False) == pytest.approx(0.0)  # clamp
+    assert s(0.0, 0.25, True, False) == pytest.approx(0.5)  # repeat blends with the far column
+    assert s(0.74, 0.8, False, True) == 3.0
+    assert s(1.3, 0.2, True, True) == 0.0
+    assert s(1.3, 0.2, False, True) == 1.0
+
+
+def test_spot_cookie_projection_and_incidence(tmp_path):
+    img = np.zeros((4, 4), dtype=np.uint8)
+    img[0:2, 2:4] = 255  # top-right quadrant of the picture is lit
+    path = _cookie_file(tmp_path, img)
+    light = Light(type="spot", position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, 1.0), spot_angle=90.0,
+                  cookie=Cookie(path=path, filter="nearest"), range=100.0, cone="smoothstep", inner_spot_angle=90.0)
+    p = pack_lights(Scene(lights=(light,)))
+    assert spot_cookie_uv(1.0, 0.0, 1.0, 1.0) == pytest.approx((1.0, 0.5))
+    # light frame of direction +z is the world frame (right = +x, up = +y)
+    bright = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 0.3, 0.3, 2.0)
+    dark = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, -0.3, 0.3, 2.0)
+    assert bright[4] == pytest.approx(1.0 / (0.18 + 4.0)) and dark[4] == 0.0
+
+
+def test_incidence_of_each_light_type():
+    lights = (Light(type="point", position=(1.0, 2.0, 3.0), color=(1.0, 0.5, 0.25), intensity=8.0, range=10.0),
+              Light(type="directional", direction=(0.0, -1.0, 0.0), intensity=3.0),
+              Light(type="spot", position=(0.0, 5.0, 0.0), direction=(0.0, -1.0, 0.0), spot_angle=60.0,
+                    intensity=2.0, range=20.0))
+    p = pack_lights(Scene(lights=lights))
+    lx, ly, lz, dist, er, eg, eb = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 1.0, 2.0, 5.0)
+    assert (lx, ly, lz, dist) == pytest.approx((0.0, 0.0, -1.0, 2.0))
+    assert (er, eg, eb) == pytest.approx((2.0, 1.0, 0.5))
+    assert light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 1.0, 2.0, 13.5)[4] == 0.0  # beyond range
+    out = light_incidence(p.ints, p.floats, p.cookies, p.lut, 1, 7.0, -3.0, 1.0)
+    assert out[:3] == pytest.approx((0.0, 1.0, 0.0)) and out[3] == np.inf and out[4:] == pytest.approx((3.0,) * 3)
+    on_axis = light_incidence(p.ints, p.floats, p.cookies, p.lut, 2, 0.0, 1.0, 0.0)
+    assert on_axis[4] == pytest.approx(2.0 / 16.0)
+    assert light_incidence(p.ints, p.floats, p.cookies, p.lut, 2, 3.0, 4.0, 0.0)[4] == 0.0  # outside the cone
+    assert p.floats[0, F_CR] == 8.0

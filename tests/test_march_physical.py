@@ -1,0 +1,239 @@
+"""The physical march: closed forms and convergence order, volume clipping, continuity, robustness,
+determinism, precision."""
+
+import math
+
+import numba
+import numpy as np
+import pytest
+from hypothesis import given, settings, strategies as st
+
+from vlref.camera import camera_from_settings
+from vlref.geometry import build_geometry
+from vlref.lights import pack_lights
+from vlref.lights.shadowmaps import NSF, NSI, ShadowMaps
+from vlref.march.physical import march_physical
+from vlref.medium import M_ST, pack_medium
+from vlref.phase import hg
+from vlref.scene.model import (Bounds, CameraSettings, HeightFog, Light, Medium, Noise,
+                               RenderSettings, Scene)
+from vlref.scene.technique_params import PhysicalParams, TechniqueParams
+from vlref.techniques.physical import march_buffers
+
+
+def _scene(lights, medium=None, cam=None, w=4, h=3, max_distance=20.0, extinction=True, precision="float64"):
+    return Scene(render=RenderSettings(width=w, height=h, max_distance=max_distance, precision=precision),
+                 camera=cam or CameraSettings(position=(0.0, 0.0, 0.0), look_at=(0.0, 0.0, 1.0), fov=40.0),
+                 medium=medium or Medium(scattering=0.1, absorption=0.0), lights=tuple(lights),
+                 techniques=TechniqueParams(physical=PhysicalParams(light_extinction=extinction)))
+
+
+def _no_shadows(n):
+    return ShadowMaps(np.zeros((n, NSI), np.int64), np.zeros((n, NSF)), np.zeros(0, np.float32),
+                      np.zeros((0, 4), np.float32))
+
+
+def _run(scene, steps, beta, sigma_t=None, distance=None):
+    """per-light inscatter (n,H,W,3), transmittance, camera, with a constant offset ``beta``."""
+    cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
+    w, h = scene.render.width, scene.render.height
+    medium = pack_medium(scene)
+    if sigma_t is not None:
+        medium.params[M_ST] = sigma_t
+    lights = pack_lights(scene)
+    dist = np.full((h, w), np.inf) if distance is None else distance
+    per = np.zeros((lights.count, h, w, 3))
+    trans = np.empty((h, w))
+    march_physical(cam.position, cam.ray_directions(), np.minimum(dist, scene.render.max_distance),
+                   np.full((h, w), beta), steps, medium.params, medium.noise, lights.ints, lights.floats,
+                   lights.cookies, lights.lut, *_shadow_args(lights.count), build_geometry(scene).arrays,
+                   scene.techniques.physical.light_extinction, 4, per, trans)
+    return per, trans, cam
+
+
+def _shadow_args(n):
+    s = _no_shadows(n)
+    return s.ints, s.floats, s.data, s.tint
+
+
+def _closed_form_point(cam, p, sigma_s, intensity, t0, t1):
+    d = cam.ray_directions()
+    tc = d @ p
+    hvec = p[None, None, :] - tc[..., None] * d
+    hh = np.linalg.norm(hvec, axis=-1)
+    return sigma_s * intensity / (4 * math.pi * hh) * (np.arctan((t1 - tc) / hh) - np.arctan((t0 - tc) / hh))
+
+
+def test_point_light_closed_form_and_convergence_order():
+    """Point light, no extinction, isotropic phase, no occluders:
+    L = σs I/(4π h) (atan((t1 - tc)/h) - atan((t0 - tc)/h)). The rectangle rule at offset β converges
+    at first order for β = 0 and at second order for β = 1/2 (midpoint)."""
+    p = np.array([0.7, 1.2, 6.0])
+    scene = _scene([Light(type="point", position=tuple(p), intensity=5.0, range=1e3)],
+                   medium=Medium(scattering=0.3, absorption=0.0, anisotropy=0.0))
+    cam = camera_from_settings(scene.camera, 4, 3)
+    exact = _closed_form_point(cam, p, 0.3, 5.0, 0.0, 20.0)
+    ns = np.array([256, 512, 1024, 2048])  # asymptotic regime for every pixel
+    slopes = {}
+    for beta in (0.0, 0.5):
+        errs = [np.abs(_run(scene, int(n), beta, sigma_t=0.0)[0][0, :, :, 0] / exact - 1).max() for n in ns]
+        slopes[beta] = np.polyfit(np.log(ns), np.log(errs), 1)[0]
+    assert -1.15 < slopes[0.0] < -0.85
+    assert -2.2 < slopes[0.5] < -1.8
+    fine = _run(scene, 4096, 0.5, sigma_t=0.0)[0][0, :, :, 0]
+    np.testing.assert_allclose(fine, exact, rtol=1e-7)
+
+
+def test_directional_light_closed_form():
+    """Directional light, homogeneous unbounded medium (T_l = 1 by convention), no shadows:
+    L = σs p(cosθ) E (1 - exp(-σt D))/σt, exact for any step count (constant source per step)."""
+    light = Light(type="directional", direction=(0.3, -0.8, 0.52), intensity=2.5, color=(1.0, 0.5, 0.2))
+    scene = _scene([light], medium=Medium(scattering=0.15, absorption=0.05, anisotropy=0.6), max_distance=30.0)
+    per, trans, cam = _run(scene, 3, 0.37)
+    d = cam.ray_directions()
+    ldir = np.asarray(light.direction) / np.linalg.norm(light.direction)
+    cos = d @ -ldir
+    want = 0.15 * hg_np(cos, 0.6) * 2.5 * (1 - math.exp(-0.2 * 30.0)) / 0.2
+    np.testing.assert_allclose(per[0, :, :, 0], want, rtol=1e-12)
+    np.testing.assert_allclose(per[0, :, :, 2], 0.2 * want, rtol=1e-12)
+    np.testing.assert_allclose(trans, math.exp(-0.2 * 30.0), rtol=1e-12)
+
+
+def test_directional_light_leg_in_a_bounded_medium():
+    """A box medium: light straight down, horizontal view rays inside the box: T_l = exp(-σt (ymax - y))."""
+    light = Light(type="directional", direction=(0.0, -1.0, 0.0), intensity=1.0)
+    medium = Medium(scattering=0.1, absorption=0.1, bounds=Bounds(min=(-50.0, -3.0, -50.0), max=(50.0, 2.0, 50.0)))
+    cam = CameraSettings(position=(0.0, 0.5, 0.0), look_at=(0.0, 0.5, 1.0), fov=1e-3)
+    scene = _scene([light], medium=medium, cam=cam, w=1, h=1, max_distance=10.0)
+    per, trans, _ = _run(scene, 4, 0.5)
+    want = 0.1 * hg_np(0.0, 0.0) * (1 - math.exp(-0.2 * 10.0)) / 0.2 * math.exp(-0.2 * 1.5)
+    assert per[0, 0, 0, 0] == pytest.approx(want, rel=1e-9)
+    off = _run(_scene([light], medium=medium, cam=cam, w=1, h=1, max_distance=10.0, extinction=False), 4, 0.5)[0]
+    assert off[0, 0, 0, 0] == pytest.approx(want / math.exp(-0.2 * 1.5), rel=1e-9)
+
+
+def hg_np(c, g):
+    return (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * np.asarray(c)) ** 1.5)
+
+
+def test_phase_sign_looking_into_the_light_is_forward():
+    light = Light(type="directional", direction=(0.0, 0.0, -1.0), intensity=1.0)  # travels toward the camera
+    scene = _scene([light], medium=Medium(scattering=0.1, anisotropy=0.8), w=1, h=1)
+    per = _run(scene, 2, 0.5)[0]
+    assert per[0, 0, 0, 0] == pytest.approx(0.1 * hg(1.0, 0.8) * (1 - math.exp(-2.0)) / 0.1, rel=1e-6)
+
+
+def test_inscatter_is_exactly_zero_outside_the_light_volumes():
+    spot = Light(type="spot", position=(0.0, 3.0, 8.0), direction=(0.0, -1.0, 0.0), spot_angle=40.0, range=6.0,
+                 intensity=10.0)
+    point = Light(type="point", position=(-4.0, -2.0, 9.0), range=1.5, intensity=10.0)
+    scene = _scene([spot, point], w=24, h=16, cam=CameraSettings(position=(0.0, 0.0, 0.0), look_at=(0.0, 0.0, 1.0),
+                                                                  fov=70.0))
+    per, _, cam = _run(scene, 16, 0.5)
+    d = cam.ray_directions()
+    t = np.linspace(0.0, 20.0, 4001)
+    pts = t[None, None, :, None] * d[:, :, None, :]
+    w = pts - np.asarray(spot.position)
+    dist = np.linalg.norm(w, axis=-1)
+    cos = -w[..., 1] / np.maximum(dist, 1e-12)
+    in_spot = ((cos > math.cos(math.radians(20.0)) - 1e-3) & (dist < 6.0 + 1e-2)).any(axis=-1)
+    assert np.all(per[0][~in_spot] == 0.0) and np.all(per[0][in_spot].sum(axis=-1) >= 0.0)
+    assert (~in_spot).sum() > 50 and (per[0][in_spot] > 0).any()
+    hvec = np.asarray(point.position)[None, None, :] - (d @ np.asarray(point.position))[..., None] * d
+    beyond = np.linalg.norm(hvec, axis=-1) > 1.5
+    assert np.all(per[1][beyond] == 0.0) and beyond.sum() > 50 and (per[1][~beyond] > 0).any()
+
+
+def test_camera_crossing_a_cone_boundary_changes_the_image_continuously():
+    spot = Light(type="spot", position=(0.0, 4.0, 0.0), direction=(0.0, -1.0, 0.0), spot_angle=60.0, range=10.0,
+                 intensity=20.0, cone="unity")
+    edge = 4.0 * math.tan(math.radians(30.0))  # cone radius at y = 0
+    values = []
+    for x in np.linspace(edge - 0.05, edge + 0.05, 41):
+        cam = CameraSettings(position=(x, 0.0, 0.0), look_at=(x, 0.0, 1.0), fov=60.0)
+        values.append(_run(_scene([spot], cam=cam, w=3, h=3), 32, 0.5)[0][0].copy())
+    values = np.array(values)
+    jumps = np.abs(np.diff(values, axis=0)).max()
+    assert values.max() > 0 and jumps < 0.05 * values.max()
+
+
+finite = dict(allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=25)
+@given(kind=st.sampled_from(["point", "spot", "directional"]),
+       lpos=st.tuples(*[st.floats(-4, 4, **finite)] * 3),
+       ldir=st.tuples(*[st.floats(-1, 1, **finite)] * 3).filter(lambda v: sum(x * x for x in v) > 1e-3),
+       g=st.sampled_from([-0.99, 0.0, 0.5, 0.99]), scattering=st.sampled_from([0.0, 0.05, 2.0]),
+       absorption=st.sampled_from([0.0, 0.3]), angle=st.floats(1.0, 179.0),
+       fog=st.booleans(), noise=st.booleans(), inside=st.booleans(), precision=st.sampled_from(["float64", "float32"]))
+def test_no_nan_or_inf_for_random_valid_scenes(kind, lpos, ldir, g, scattering, absorption, angle, fog, noise,
+                                               inside, precision):
+    light = Light(type=kind, position=lpos, direction=ldir, spot_angle=angle, range=5.0, intensity=100.0)
+    medium = Medium(scattering=scattering, absorption=absorption, anisotropy=g,
+                    height_fog=HeightFog(base=0.0, falloff=0.5) if fog else None,
+                    noise=Noise(scale=0.7, period=4) if noise else None)
+    cam_pos = lpos if inside else (0.0, 0.0, -6.0)
+    cam = CameraSettings(position=cam_pos, rotation=(10.0, 200.0, 0.0), fov=90.0)
+    scene = _scene([light], medium=medium, cam=cam, w=5, h=4, precision=precision)
+    geo = build_geometry(scene).arrays
+    c = camera_from_settings(scene.camera, 5, 4)
+    distance = np.full((4, 5), np.inf)
+    distance[0, 0] = 0.0
+    distance[1, 1] = 1e-9
+    per, trans = march_buffers(scene, c, distance, pack_lights(scene), _no_shadows(1), geo, 5, "bayer4")
+    assert per.dtype == np.dtype(precision) and trans.dtype == np.dtype(precision)
+    assert np.all(np.isfinite(per)) and np.all(per >= 0) and np.all((trans >= 0) & (trans <= 1))
+
+
+def _busy_scene(precision="float64"):
+    lights = [Light(type="spot", position=(0.0, 4.0, 6.0), direction=(0.1, -1.0, 0.1), spot_angle=50.0, range=9.0,
+                    intensity=30.0),
+              Light(type="point", position=(1.0, 1.0, 4.0), range=4.0, intensity=5.0, attenuation="windowed"),
+              Light(type="directional", direction=(0.2, -0.5, 1.0), intensity=0.5)]
+    medium = Medium(scattering=0.2, absorption=0.05, anisotropy=0.4, height_fog=HeightFog(base=0.0, falloff=0.2),
+                    noise=Noise(scale=0.5, period=8))
+    return _scene(lights, medium=medium, w=16, h=12, precision=precision)
+
+
+def test_bit_identical_for_any_thread_count():
+    scene = _busy_scene()
+    c = camera_from_settings(scene.camera, 16, 12)
+    geo = build_geometry(scene).arrays
+    dist = np.full((12, 16), np.inf)
+    results = []
+    before = numba.get_num_threads()
+    try:
+        for n in sorted({1, numba.config.NUMBA_NUM_THREADS}):
+            numba.set_num_threads(n)
+            results.append(march_buffers(scene, c, dist, pack_lights(scene), _no_shadows(3), geo, 8, "hash"))
+    finally:
+        numba.set_num_threads(before)
+    for per, trans in results[1:]:
+        assert np.array_equal(per, results[0][0]) and np.array_equal(trans, results[0][1])
+
+
+def test_float32_precision_matches_float64():
+    out = {}
+    for precision in ("float64", "float32"):
+        scene = _busy_scene(precision)
+        c = camera_from_settings(scene.camera, 16, 12)
+        out[precision] = march_buffers(scene, c, np.full((12, 16), np.inf), pack_lights(scene), _no_shadows(3),
+                                       build_geometry(scene).arrays, 8, "bayer4")
+    assert out["float32"][0].dtype == np.float32
+    scale = out["float64"][0].max()
+    np.testing.assert_allclose(out["float32"][0], out["float64"][0], atol=1e-4 * scale)
+    np.testing.assert_allclose(out["float32"][1], out["float64"][1], atol=1e-5)
+
+
+def test_technique_render_composites_and_exposes_per_light_buffers():
+    from vlref.render import render
+    from vlref.scene import load_scene
+
+    scene = load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"])
+    res = render(scene, stages=True)
+    b = res.buffers
+    np.testing.assert_allclose(b["final"], b["scene_colour"] * b["transmittance"][..., None] + b["inscatter"])
+    np.testing.assert_array_equal(b["inscatter"], b["inscatter_light_0"])
+    assert b["inscatter"].max() > 0 and "shadow_spot_0" in b
+    assert np.all(np.isfinite(b["final"]))

@@ -1,0 +1,156 @@
+"""The quadrature reference against closed forms: the true error must lie within the reported bound."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy import optimize
+
+from vlref.camera import camera_from_settings
+from vlref.reference.closed_forms import closest_approach, directional_homogeneous, point_light_extinction
+from vlref.reference.quadrature import render_reference
+from vlref.scene.model import (Bounds, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings,
+                               Sphere)
+
+W, H = 8, 6
+
+
+def _scene(medium, lights, objects=(), max_distance=30.0, camera=None):
+    return Scene(render=RenderSettings(width=W, height=H, max_distance=max_distance),
+                 camera=camera or CameraSettings(position=(0.0, 1.0, -10.0), look_at=(0.0, 1.0, 0.0), fov=50.0),
+                 medium=medium, lights=tuple(lights), objects=tuple(objects))
+
+
+def _rays(scene):
+    cam = camera_from_settings(scene.camera, W, H)
+    return cam.position, cam.ray_directions()
+
+
+def _point_exact(scene, light, pieces=None):
+    """(c) over the range-sphere chord (pieces: optional list of (H, W) interval arrays to subtract)."""
+    m = scene.medium
+    o, d = _rays(scene)
+    tc, h = closest_approach(o, d, np.array(light.position))
+    half = np.sqrt(np.maximum(light.range ** 2 - h * h, 0.0))
+    a = np.clip(tc - half, 0.0, scene.render.max_distance)
+    b = np.clip(tc + half, 0.0, scene.render.max_distance)
+    return point_light_extinction(m.scattering, m.extinction, m.anisotropy, light.intensity, tc, h, a, b)
+
+
+def _check_bound(result, exact, rel_tol):
+    true = np.abs(result.inscatter[..., 0] - exact)
+    assert np.all(np.isfinite(result.inscatter)) and result.stats["unconverged"] == 0
+    assert np.all(true <= result.error + 1e-15), "true error exceeds the reported bound"
+    assert np.all(result.error <= np.maximum(rel_tol * np.abs(result.inscatter).max(axis=-1), 1e-9) * (1 + 1e-9))
+    return true
+
+
+@pytest.mark.parametrize("g", [0.0, 0.7, -0.5])
+def test_point_light_matches_airlight_integral(g):
+    light = Light(type="point", position=(0.5, 1.3, 0.0), intensity=20.0, range=25.0)
+    scene = _scene(Medium(scattering=0.1, absorption=0.05, anisotropy=g), [light])
+    res = render_reference(scene)
+    exact = _point_exact(scene, light)
+    true = _check_bound(res, exact, 1e-4)
+    assert np.all(true <= 1e-4 * exact)
+    # colour and transmittance
+    assert np.allclose(res.inscatter[..., 0], res.inscatter[..., 2])
+    assert np.allclose(res.transmittance, math.exp(-0.15 * 30.0), rtol=1e-12)
+
+
+def test_tighter_tolerance_tightens_the_error():
+    light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
+    scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
+    exact = _point_exact(scene, light)
+    for tol in (1e-3, 1e-6, 1e-9):
+        res = render_reference(scene, rel_tol=tol, abs_tol=1e-14)
+        true = _check_bound(res, exact, tol)
+        assert np.all(true <= tol * exact)
+
+
+def test_directional_light_in_a_bounded_box_matches_closed_form():
+    lo, hi = (-9.0, -2.0, -8.0), (6.0, 3.0, 8.0)
+    m = Medium(scattering=0.08, absorption=0.04, anisotropy=0.5, bounds=Bounds(min=lo, max=hi))
+    light = Light(type="directional", direction=(0.3, -1.0, 0.2), intensity=3.0)
+    scene = _scene(m, [light], camera=CameraSettings(position=(0.0, 1.0, -3.0), look_at=(1.0, 0.5, 4.0), fov=60.0))
+    res = render_reference(scene)
+    o, d = _rays(scene)
+    l = -np.array(light.direction) / np.linalg.norm(light.direction)
+    # the ray starts inside the box; it leaves through some face at t1
+    with np.errstate(divide="ignore"):
+        ts = np.stack([(np.array(hi)[k] - o[k]) / d[..., k] for k in range(3)]
+                      + [(np.array(lo)[k] - o[k]) / d[..., k] for k in range(3)], axis=-1)
+    t1 = np.min(np.where(ts > 0, ts, np.inf), axis=-1)
+    # light leg: from x(t) toward l to the top face (l_y > 0 and the box is wide enough here)
+    ly = l[1]
+    leg0 = (hi[1] - o[1]) / ly
+    rate = -d[..., 1] / ly
+    exact = directional_homogeneous(0.08, 0.12, 0.5, d @ l, 3.0, 0.0, t1, leg0, rate)
+    # every light leg leaves through the top face: check it at both ends of each ray (the leg is affine)
+    for t in (np.zeros_like(t1), t1):
+        xs = o + t[..., None] * d
+        exit_pts = xs + (hi[1] - xs[..., 1])[..., None] / ly * l
+        for k in (0, 2):
+            assert np.all((exit_pts[..., k] >= lo[k]) & (exit_pts[..., k] <= hi[k]))
+    true = _check_bound(res, exact, 1e-4)
+    assert np.all(true <= 1e-4 * exact)
+
+
+def _sphere_shadow_intervals(o, d, p, c, r, t0, t1, n=4000):
+    """Where the segment x(t) -> p passes through the sphere (c, r): sign changes of its distance to c minus r,
+    refined by brentq (independent of the reference's visibility bisection)."""
+    def gap(t):
+        x = o + t * d
+        u = p - x
+        s = np.clip(np.dot(c - x, u) / np.dot(u, u), 0.0, 1.0)
+        return np.linalg.norm(x + s * u - c) - r
+    ts = np.linspace(t0, t1, n)
+    gs = np.array([gap(t) for t in ts])
+    roots = [optimize.brentq(gap, ts[i], ts[i + 1], xtol=1e-14, rtol=1e-15)
+             for i in range(n - 1) if gs[i] * gs[i + 1] < 0]
+    edges = [t0] + roots + [t1]
+    return [(edges[i], edges[i + 1]) for i in range(len(edges) - 1) if gap(0.5 * (edges[i] + edges[i + 1])) > 0]
+
+
+def test_sphere_shadow_boundaries_are_located():
+    light = Light(type="point", position=(0.0, 4.0, 0.0), intensity=30.0, range=20.0,
+                  shadows=ShadowSettings(filter="exact"))
+    blocker = Sphere(center=(0.3, 2.4, 0.5), radius=0.6)
+    m = Medium(scattering=0.1, absorption=0.02, anisotropy=0.2)
+    scene = _scene(m, [light], [blocker], max_distance=20.0,
+                   camera=CameraSettings(position=(0.0, 0.5, -8.0), look_at=(0.0, 1.2, 0.0), fov=40.0))
+    res = render_reference(scene)
+    o, d = _rays(scene)
+    p, c = np.array(light.position), np.array(blocker.center)
+    exact = np.zeros((H, W))
+    shadowed = 0
+    for y in range(H):
+        for x in range(W):
+            dd = d[y, x]
+            tc, h = closest_approach(o, dd, p)
+            half = math.sqrt(max(light.range ** 2 - h * h, 0.0))
+            a, b = max(0.0, tc - half), min(20.0, tc + half)
+            # a view ray that hits the sphere ends on it
+            oc = o - c
+            bb = np.dot(oc, dd)
+            disc = bb * bb - (np.dot(oc, oc) - blocker.radius ** 2)
+            if disc >= 0.0 and -bb - math.sqrt(disc) > 0.0:
+                b = min(b, -bb - math.sqrt(disc))
+            lit = _sphere_shadow_intervals(o, dd, p, c, blocker.radius, a, b)
+            shadowed += len(lit) > 1
+            exact[y, x] = sum(point_light_extinction(0.1, 0.12, 0.2, 30.0, tc, h, u, v) for u, v in lit)
+    assert shadowed > 5, "the scene must cast volumetric shadows across the image"
+    true = _check_bound(res, exact, 1e-4)
+    assert np.all(true <= 1e-4 * exact)
+
+
+def test_zero_scattering_is_black_and_deterministic():
+    light = Light(type="point", position=(0.0, 1.0, 0.0), intensity=20.0, range=25.0)
+    scene = _scene(Medium(scattering=0.0, absorption=0.2), [light])
+    res = render_reference(scene)
+    assert not res.inscatter.any() and res.max_error == 0.0
+    assert np.allclose(res.transmittance, math.exp(-0.2 * 30.0))
+    a = render_reference(dataclasses.replace(scene, medium=Medium(scattering=0.2)))
+    b = render_reference(dataclasses.replace(scene, medium=Medium(scattering=0.2)))
+    assert np.array_equal(a.inscatter, b.inscatter) and np.array_equal(a.error, b.error)

@@ -1,0 +1,118 @@
+"""Shadow maps agree with exact shadow rays away from shadow edges (spot, point cube faces, directional
+cascades), coloured transparent occluders, buffer names."""
+
+import math
+
+import numpy as np
+import pytest
+
+from vlref.camera import camera_from_settings
+from vlref.geometry import build_geometry
+from vlref.lights import pack_lights
+from vlref.lights.shadowmaps import build_shadow_maps, cascade_splits, shadow_visibility
+from vlref.scene.model import (CameraSettings, Light, Material, Plane, Scene, ShadowSettings, Sphere)
+
+SPHERES = (((0.0, 1.5, 3.0), 0.6), ((2.5, 0.0, 0.0), 0.5), ((-2.0, 0.3, -1.0), 0.5), ((0.0, -2.2, 0.4), 0.6),
+           ((0.3, 2.6, 0.0), 0.5), ((1.6, 1.6, -1.6), 0.5), ((-1.5, -1.5, 1.5), 0.45))
+
+
+def _scene(light, filt, transparent=False):
+    objs = [Sphere(center=c, radius=r) for c, r in SPHERES]
+    objs.append(Plane(point=(0.0, -4.0, 0.0), normal=(0.0, 1.0, 0.0)))
+    if transparent:
+        objs.append(Plane(point=(0.0, 0.0, 5.0), normal=(0.0, 0.0, 1.0),
+                          material=Material(opacity=0.5, tint=(1.0, 0.4, 0.2))))
+    light = Light(**{**light, "shadows": ShadowSettings(filter=filt, resolution=256, bias=0.02)})
+    return Scene(lights=(light,), objects=tuple(objs),
+                 camera=CameraSettings(position=(0.0, 0.0, -8.0), look_at=(0.0, 0.0, 0.0), far=200.0))
+
+
+def _edge_distance(points, light, kind):
+    """Distance of each shadow ray from the nearest sphere silhouette (|line-centre distance - r|)."""
+    out = np.full(len(points), np.inf)
+    for c, r in SPHERES:
+        c = np.asarray(c)
+        if kind == 2:
+            src = points - np.asarray(light["direction"]) / np.linalg.norm(light["direction"]) * 1e3
+        else:
+            src = np.broadcast_to(np.asarray(light["position"]), points.shape)
+        seg = points - src
+        s = np.clip(((c - src) * seg).sum(1) / (seg * seg).sum(1), 0, 1)
+        closest = src + s[:, None] * seg
+        out = np.minimum(out, np.abs(np.linalg.norm(closest - c, axis=1) - r))
+        out = np.minimum(out, np.abs(np.linalg.norm(points - c, axis=1) - r))  # near a surface
+    return out
+
+
+def _compare(light, kind, points, filt, margin=0.12, transparent=False):
+    vis, maps = {}, {}
+    for f in (filt, "exact"):
+        scene = _scene(light, f, transparent)
+        cam = camera_from_settings(scene.camera, 32, 24)
+        geo = build_geometry(scene)
+        packed = pack_lights(scene)
+        sm = maps[f] = build_shadow_maps(scene, cam, geo, packed)
+        vis[f] = np.array([shadow_visibility(sm.ints, sm.floats, sm.data, sm.tint, geo.arrays, kind, packed.floats,
+                                             0, *p) for p in points])
+    away = _edge_distance(points, light, kind) > margin
+    assert away.sum() > 0.5 * len(points)
+    assert (vis["exact"][away] == 0).any() and (vis["exact"][away] > 0).any()  # the test sees both
+    np.testing.assert_allclose(vis[filt][away], vis["exact"][away], atol=1e-6)
+    return maps[filt], vis
+
+
+def _random_points(n, lo, hi, seed=1):
+    return np.random.default_rng(seed).uniform(lo, hi, size=(n, 3))
+
+
+@pytest.mark.parametrize("filt", ["hard", "pcf"])
+def test_point_cube_map_matches_exact_visibility_on_every_face(filt):
+    light = dict(type="point", position=(0.0, 0.0, 0.0), range=30.0)
+    pts = _random_points(900, -3.8, 3.8)
+    pts = pts[np.linalg.norm(pts, axis=1) > 0.5]
+    sm, vis = _compare(light, 0, pts, filt)
+    # the compared points include many near cube-face borders (|x| ~ |y|): no seam there
+    assert np.isclose(np.abs(pts[:, 0]), np.abs(pts[:, 1]), atol=0.3).sum() > 20
+    assert set(sm.buffers()) == {f"shadow_point_0_face_{s}" for s in ("px", "nx", "py", "ny", "pz", "nz")}
+
+
+@pytest.mark.parametrize("filt", ["hard", "pcf"])
+def test_spot_map_matches_exact_visibility(filt):
+    light = dict(type="spot", position=(0.0, 6.0, 0.0), direction=(0.0, -1.0, 0.0), spot_angle=100.0, range=30.0)
+    pts = _random_points(900, (-4, -3.9, -4), (4, 4.5, 4))
+    w = pts - np.array([0.0, 6.0, 0.0])
+    pts = pts[(-w[:, 1] / np.linalg.norm(w, axis=1)) > math.cos(math.radians(48))]
+    sm, _ = _compare(light, 1, pts, filt)
+    assert list(sm.buffers()) == ["shadow_spot_0"] and sm.buffers()["shadow_spot_0"].shape == (256, 256)
+
+
+@pytest.mark.parametrize("filt", ["hard", "pcf"])
+def test_directional_cascades_match_exact_visibility_across_cascade_borders(filt):
+    light = dict(type="directional", direction=(0.3, -1.0, 0.2))
+    pts = _random_points(900, (-4, -3.9, -6), (4, 3, 12))
+    sm, _ = _compare(light, 2, pts, filt, margin=0.15)
+    names = list(sm.buffers())
+    assert names == [f"shadow_dir_0_cascade_{k}" for k in range(4)]
+    # the points span several cascades
+    depth = pts[:, 2] + 8.0
+    splits = cascade_splits(0.1, 100.0, 4, 0.75)
+    assert len(np.unique(np.searchsorted(splits, depth))) >= 3
+
+
+def test_cascade_splits_practical_scheme():
+    s = cascade_splits(1.0, 100.0, 4, 1.0)
+    np.testing.assert_allclose(s, [1.0, 10 ** 0.5, 10.0, 10 ** 1.5, 100.0])
+    np.testing.assert_allclose(cascade_splits(1.0, 101.0, 4, 0.0), [1, 26, 51, 76, 101])
+
+
+def test_transparent_occluder_colours_the_light_in_maps_and_exact_rays():
+    light = dict(type="spot", position=(0.0, 0.0, 9.0), direction=(0.0, 0.0, -1.0), spot_angle=60.0, range=30.0)
+    pts = np.array([[x, y, 1.5] for x in np.linspace(-1.5, 1.5, 7) for y in np.linspace(0.0, 2.5, 6)])
+    pts = pts[_edge_distance(pts, light, 1) > 0.12]
+    for filt in ("hard", "pcf"):
+        sm, vis = _compare(light, 1, pts, filt, transparent=True)
+        lit = vis["exact"][:, 0] > 0
+        np.testing.assert_allclose(vis["exact"][lit], [[0.5, 0.2, 0.1]] * lit.sum(), atol=1e-12)
+        bufs = sm.buffers()
+        assert bufs["shadow_spot_0_transmittance"].shape == (256, 256, 3)
+        assert np.isfinite(bufs["shadow_spot_0_transparent_distance"]).any()

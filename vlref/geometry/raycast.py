@@ -1,0 +1,89 @@
+"""Ray casting of the G-buffer: one primary ray per pixel centre against the opaque geometry.
+
+Rays: origin ``camera.position``, unit directions ``camera.ray_directions()`` (pixel centres,
+row 0 at the top), ``t`` in ``(0, far / dot(d, forward))`` so every ray ends on the far plane.
+Only opaque objects (``opacity == 1``) are seen; transparent occluders write nothing here (they
+act on light through :func:`vlref.geometry.shadow_transmittance`).
+
+Per pixel with a hit at distance ``t`` on object ``k``: ``distance = t``, ``depth = t dot(d, f)``
+(linear eye depth, the view-space z), ``position = o + t d``, ``normal`` the unit normal facing
+the camera, ``albedo``/``emission`` of object ``k``, ``object_id = k``. Sky pixels: ``depth`` and
+``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange),
+so the buffers are bit-identical for any thread count.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit, prange
+
+from ..camera import Camera
+from ..scene.model import Scene
+from .scene_geometry import Geometry, build_geometry, closest_hit
+
+__all__ = ["GBuffer", "raycast"]
+
+
+@dataclass(frozen=True)
+class GBuffer:
+    """Primary-ray buffers, all (H, W[, 3]) float64 except ``object_id`` (H, W) int32 (module docstring)."""
+
+    depth: np.ndarray
+    distance: np.ndarray
+    position: np.ndarray
+    normal: np.ndarray
+    albedo: np.ndarray
+    emission: np.ndarray
+    object_id: np.ndarray
+
+    @property
+    def hit(self) -> np.ndarray:
+        """(H, W) bool: the pixel sees a surface."""
+        return self.object_id >= 0
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
+                    object_id):
+    h, w = depth.shape
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    for p in prange(h * w):
+        y, x = p // w, p % w
+        dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
+        cos_f = dx * forward[0] + dy * forward[1] + dz * forward[2]
+        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, far / cos_f, True)
+        object_id[y, x] = obj
+        if obj < 0:
+            depth[y, x] = np.inf
+            distance[y, x] = np.inf
+            continue
+        depth[y, x] = t * cos_f
+        distance[y, x] = t
+        position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
+        normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = nx, ny, nz
+        for c in range(3):
+            albedo[y, x, c] = geo.albedo[obj, c]
+            emission[y, x, c] = geo.emission[obj, c]
+
+
+def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
+            width: int | None = None, height: int | None = None) -> GBuffer:
+    """The G-buffer of ``scene`` seen by ``camera`` (at ``width x height`` if given, via ``camera.with_size``).
+
+    ``geometry`` defaults to ``build_geometry(scene)``; pass it to reuse a built BVH.
+    """
+    if width is not None or height is not None:
+        camera = camera.with_size(camera.width if width is None else width,
+                                  camera.height if height is None else height)
+    geo = (build_geometry(scene) if geometry is None else geometry).arrays
+    h, w = camera.height, camera.width
+    dirs = np.ascontiguousarray(camera.ray_directions())
+    buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), position=np.zeros((h, w, 3)),
+                  normal=np.zeros((h, w, 3)), albedo=np.zeros((h, w, 3)), emission=np.zeros((h, w, 3)),
+                  object_id=np.empty((h, w), dtype=np.int32))
+    _raycast_kernel(geo, np.ascontiguousarray(camera.position, dtype=np.float64), dirs,
+                    np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far),
+                    buf.depth, buf.distance, buf.position, buf.normal, buf.albedo, buf.emission, buf.object_id)
+    return buf

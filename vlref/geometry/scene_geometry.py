@@ -1,0 +1,272 @@
+"""Packed scene geometry: analytic primitives + triangle meshes + BVH + materials, and ray queries.
+
+:func:`build_geometry` turns ``scene.objects`` into a :class:`GeoArrays` named tuple of NumPy
+arrays (the "geo" tuple) that njit code takes as its first argument:
+
+=================  ===========  ==============================================================
+field              shape/dtype  meaning
+=================  ===========  ==============================================================
+prim_kind          (P,) int64   ``PLANE``, ``SPHERE``, ``BOX``, ``CYLINDER`` (primitives.py)
+prim_obj           (P,) int64   object id (index in ``scene.objects``)
+prim_row           (P, 16)      packed primitive (see :mod:`vlref.geometry.primitives`)
+lin_prims          (L,) int64   primitives tested linearly, ascending: planes and transparent ones
+pnode_*            (B...)       BVH over the other (opaque bounded) primitives' world boxes
+                                (:mod:`vlref.geometry.prim_bvh`): ``pnode_min/max`` (B, 3),
+                                ``pnode_first/count`` (B,) int32, ``pnode_prims`` primitive index
+                                of each leaf slot
+albedo, emission   (M, 3)       per object (M = ``len(scene.objects)``), linear RGB
+opacity            (M,)         1 = opaque; below 1 a transparent occluder
+tint               (M, 3)       colour of light passing a transparent object
+node_min/max       (N, 3)       BVH bounds (see :mod:`vlref.geometry.bvh`)
+node_first/count   (N,) int32   BVH topology
+v0, e1, e2         (T, 3)       triangles in BVH order: vertex 0 and edges ``v1 - v0``, ``v2 - v0``
+tri_obj            (T,) int64   object id of each triangle
+tri_opaque         (T,) bool    ``opacity[tri_obj] == 1``
+=================  ===========  ==============================================================
+
+Queries (``t`` in units of ``|d|``; intervals are open):
+
+* :func:`closest_hit` -- nearest surface; the normal faces the ray origin.
+* :func:`shadow_transmittance` -- visibility of a light along a shadow ray, coloured by
+  transparent occluders. Every surface *crossing* counts: a ray through a closed transparent
+  solid (sphere, box, cylinder, closed mesh) is attenuated twice, once entering and once leaving,
+  as a pane of glass per surface.
+* :func:`trace_distances` -- many rays at once, parallel over rays (shadow maps).
+
+Both queries give the same bits as a linear scan of the primitives in scene order followed by the
+triangle BVH (ties between primitives go to the lower index; :mod:`vlref.geometry.prim_bvh`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import namedtuple
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from numba import njit, prange
+
+from ..scene.model import Box, Mesh, Plane, Scene, Sphere
+from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance
+from .prim_bvh import build_primitive_bvh, prims_closest, prims_occluded
+from .obj import load_obj, transform_vertices
+from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
+                         pack_plane, pack_sphere, triangle_normal)
+
+__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance",
+           "trace_distances", "SHADOW_EPS"]
+
+SHADOW_EPS = 1e-6
+"""Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
+
+INF = np.inf
+
+GeoArrays = namedtuple("GeoArrays", ["prim_kind", "prim_obj", "prim_row", "lin_prims", "pnode_min", "pnode_max",
+                                     "pnode_first", "pnode_count", "pnode_prims", "albedo", "emission",
+                                     "opacity", "tint", "node_min", "node_max", "node_first", "node_count",
+                                     "v0", "e1", "e2", "tri_obj", "tri_opaque"])
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The packed scene geometry.
+
+    Attributes
+    ----------
+    arrays : the :class:`GeoArrays` "geo" tuple passed to the njit queries.
+    bvh : the triangle BVH; ``bvh.order[i]`` is the input index of packed triangle ``i``, input
+        triangles being the meshes' faces concatenated in object order.
+    bounds_min, bounds_max : (3,) world box of every bounded object (planes excluded);
+        both ``nan``-free and equal to ``0`` when the scene has no bounded object.
+    prim_bvh : the BVH over the opaque bounded primitives; ``arrays.pnode_prims`` maps its
+        ``order`` to primitive indices.
+    """
+
+    arrays: GeoArrays
+    bvh: Bvh
+    bounds_min: np.ndarray
+    bounds_max: np.ndarray
+    prim_bvh: Bvh
+
+    @property
+    def n_objects(self) -> int:
+        return self.arrays.opacity.shape[0]
+
+    @property
+    def n_triangles(self) -> int:
+        return self.arrays.v0.shape[0]
+
+
+def _mesh_path(mesh: Mesh, scene: Scene) -> Path:
+    """The OBJ path: absolute as the scene loader resolves it, else relative to ``scene.source``."""
+    path = Path(mesh.path)
+    if path.is_absolute() or not scene.source:
+        return path
+    return Path(scene.source).resolve().parent / path
+
+
+def _primitive(obj) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """``(kind, row, box_min, box_max)`` of one analytic object (planes get an empty box)."""
+    if isinstance(obj, Plane):
+        return PLANE, pack_plane(obj.point, obj.normal), np.full(3, np.inf), np.full(3, -np.inf)
+    if isinstance(obj, Sphere):
+        c = np.asarray(obj.center, dtype=np.float64)
+        return SPHERE, pack_sphere(c, obj.radius), c - obj.radius, c + obj.radius
+    if isinstance(obj, Box):
+        row = pack_box(obj.center, obj.size, obj.rotation)
+        ext = np.abs(row[3:12].reshape(3, 3)) @ row[12:15]
+        return BOX, row, row[0:3] - ext, row[0:3] + ext
+    row = pack_cylinder(obj.center, obj.radius, obj.height, obj.rotation)
+    axis = row[3:12].reshape(3, 3)[:, 1]
+    ext = np.abs(axis) * row[13] + obj.radius * np.sqrt(np.maximum(0.0, 1.0 - axis * axis))
+    return CYLINDER, row, row[0:3] - ext, row[0:3] + ext
+
+
+def build_geometry(scene: Scene) -> Geometry:
+    """Pack ``scene.objects`` (object id = index) into a :class:`Geometry`; meshes are loaded and transformed.
+
+    Raises :class:`vlref.errors.InputError` (from :func:`vlref.geometry.obj.load_obj`) for a bad OBJ file.
+    """
+    objects = scene.objects
+    m = len(objects)
+    albedo = np.array([o.material.albedo for o in objects], dtype=np.float64).reshape(m, 3)
+    emission = np.array([o.material.emission for o in objects], dtype=np.float64).reshape(m, 3)
+    opacity = np.array([o.material.opacity for o in objects], dtype=np.float64).reshape(m)
+    tint = np.array([o.material.tint for o in objects], dtype=np.float64).reshape(m, 3)
+    kinds, objs, rows, box_lo, box_hi = [], [], [], [], []
+    tris, tri_objs = [], []
+    lo, hi = np.full(3, np.inf), np.full(3, -np.inf)
+    for k, obj in enumerate(objects):
+        if isinstance(obj, Mesh):
+            verts, faces = load_obj(_mesh_path(obj, scene))
+            verts = transform_vertices(verts, obj.position, obj.rotation, obj.scale)
+            tris.append(verts[faces])
+            tri_objs.append(np.full(faces.shape[0], k, dtype=np.int64))
+            lo, hi = np.minimum(lo, verts.min(axis=0)), np.maximum(hi, verts.max(axis=0))
+            continue
+        kind, row, bmin, bmax = _primitive(obj)
+        kinds.append(kind)
+        objs.append(k)
+        rows.append(row)
+        box_lo.append(bmin)
+        box_hi.append(bmax)
+        lo, hi = np.minimum(lo, bmin), np.maximum(hi, bmax)
+    tri = np.concatenate(tris) if tris else np.zeros((0, 3, 3))
+    tri_obj = np.concatenate(tri_objs) if tri_objs else np.zeros(0, dtype=np.int64)
+    bvh = build_bvh(tri[:, 0], tri[:, 1], tri[:, 2])
+    tri, tri_obj = tri[bvh.order], tri_obj[bvh.order]
+    prim_kind, prim_obj = np.array(kinds, dtype=np.int64), np.array(objs, dtype=np.int64)
+    in_tree = (prim_kind != PLANE) & (opacity[prim_obj] >= 1.0)
+    tree_idx = np.flatnonzero(in_tree)
+    prim_bvh = build_primitive_bvh(np.array(box_lo).reshape(-1, 3)[tree_idx],
+                                   np.array(box_hi).reshape(-1, 3)[tree_idx])
+    arrays = GeoArrays(
+        prim_kind=prim_kind, prim_obj=prim_obj, prim_row=np.array(rows, dtype=np.float64).reshape(len(rows), ROW),
+        lin_prims=np.flatnonzero(~in_tree).astype(np.int64), pnode_min=prim_bvh.node_min,
+        pnode_max=prim_bvh.node_max, pnode_first=prim_bvh.node_first, pnode_count=prim_bvh.node_count,
+        pnode_prims=tree_idx[prim_bvh.order].astype(np.int64),
+        albedo=albedo, emission=emission, opacity=opacity, tint=tint,
+        node_min=bvh.node_min, node_max=bvh.node_max, node_first=bvh.node_first, node_count=bvh.node_count,
+        v0=np.ascontiguousarray(tri[:, 0]), e1=np.ascontiguousarray(tri[:, 1] - tri[:, 0]),
+        e2=np.ascontiguousarray(tri[:, 2] - tri[:, 0]), tri_obj=np.ascontiguousarray(tri_obj),
+        tri_opaque=np.ascontiguousarray(opacity[tri_obj] >= 1.0))
+    if not np.all(np.isfinite(lo)):
+        lo, hi = np.zeros(3), np.zeros(3)
+    return Geometry(arrays, bvh, lo, hi, prim_bvh)
+
+
+@njit(cache=True, fastmath=False)
+def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
+    """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
+
+    ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
+    ray origin (``dot(n, d) <= 0``).
+    """
+    # geo fields are bound to locals outside the loops: a namedtuple field read inside a loop costs
+    # reference-count traffic on every iteration (measured: ~200 ns per ray in BENCHMARKS.md)
+    lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
+    best, best_k, nx, ny, nz = tmax, -1, 0.0, 0.0, 0.0
+    for j in range(lin.shape[0]):
+        k = lin[j]
+        if opaque_only and opacity[prim_obj[k]] < 1.0:
+            continue
+        t, ax, ay, az = hit_primitive(kind[k], row[k], ox, oy, oz, dx, dy, dz, tmin, best)
+        if t < best:
+            best, best_k, nx, ny, nz = t, k, ax, ay, az
+    best, best_k, nx, ny, nz = prims_closest(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count,
+                                             geo.pnode_prims, geo.prim_kind, geo.prim_row, ox, oy, oz, dx, dy, dz,
+                                             tmin, tmax, best, best_k, nx, ny, nz)
+    obj = geo.prim_obj[best_k] if best_k >= 0 else -1
+    t, i = bvh_closest(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2,
+                       geo.tri_opaque, opaque_only, ox, oy, oz, dx, dy, dz, tmin, best)
+    if i >= 0:
+        best, obj = t, geo.tri_obj[i]
+        nx, ny, nz = triangle_normal(geo.e1, geo.e2, i)
+    if obj < 0:
+        return INF, -1, 0.0, 0.0, 0.0
+    if nx * dx + ny * dy + nz * dz > 0.0:
+        nx, ny, nz = -nx, -ny, -nz
+    return best, obj, nx, ny, nz
+
+
+@njit(cache=True, fastmath=False)
+def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
+    """RGB transmittance of the segment ``o + t d``, ``t`` in ``(SHADOW_EPS / |d|, tmax)``.
+
+    0 when an opaque surface (``opacity == 1``) lies on it (any-hit early exit), else
+    ``prod (1 - opacity_k) * tint_k`` over the transparent surface crossings ``k`` (module docstring).
+    """
+    norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+    if norm == 0.0:
+        return 1.0, 1.0, 1.0
+    tmin = SHADOW_EPS / norm
+    if prims_occluded(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims,
+                      geo.prim_kind, geo.prim_row, ox, oy, oz, dx, dy, dz, tmin, tmax):
+        return 0.0, 0.0, 0.0
+    lin, kind, row, prim_obj, opacity, tint = (geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity,
+                                               geo.tint)
+    tr, tg, tb = 1.0, 1.0, 1.0
+    for j in range(lin.shape[0]):
+        k = lin[j]
+        o = prim_obj[k]
+        t = tmin
+        for _ in range(2):  # a plane is crossed at most once, a convex solid at most twice
+            t, _nx, _ny, _nz = hit_primitive(kind[k], row[k], ox, oy, oz, dx, dy, dz, t, tmax)
+            if t == INF:
+                break
+            if opacity[o] >= 1.0:
+                return 0.0, 0.0, 0.0
+            clear = 1.0 - opacity[o]
+            tr *= clear * tint[o, 0]
+            tg *= clear * tint[o, 1]
+            tb *= clear * tint[o, 2]
+    mr, mg, mb = bvh_transmittance(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1,
+                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ox, oy, oz, dx, dy, dz, tmin, tmax)
+    return tr * mr, tg * mg, tb * mb
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _trace_kernel(geo, origins, dirs, tmax, opaque_only, t_out, obj_out):
+    for r in prange(origins.shape[0]):
+        t, obj, _nx, _ny, _nz = closest_hit(geo, origins[r, 0], origins[r, 1], origins[r, 2],
+                                            dirs[r, 0], dirs[r, 1], dirs[r, 2], 0.0, tmax[r], opaque_only)
+        t_out[r] = t
+        obj_out[r] = obj
+
+
+def trace_distances(geo: GeoArrays, origins, dirs, tmax, opaque_only: bool = True):
+    """Closest hits of many rays, parallel over rays: ``(t (N,) float64, obj (N,) int32)``.
+
+    ``origins``, ``dirs`` (N, 3) (or broadcastable); ``tmax`` a scalar or (N,); ``tmin = 0``.
+    ``t = inf`` and ``obj = -1`` where nothing is hit. Each ray is independent, so the result is
+    the same for any thread count.
+    """
+    o, d = np.broadcast_arrays(np.asarray(origins, dtype=np.float64), np.asarray(dirs, dtype=np.float64))
+    o = np.ascontiguousarray(o.reshape(-1, 3))
+    d = np.ascontiguousarray(d.reshape(-1, 3))
+    tm = np.ascontiguousarray(np.broadcast_to(np.asarray(tmax, dtype=np.float64), (o.shape[0],)))
+    t = np.empty(o.shape[0])
+    obj = np.empty(o.shape[0], dtype=np.int32)
+    _trace_kernel(geo, o, d, tm, bool(opaque_only), t, obj)
+    return t, obj

@@ -1,0 +1,119 @@
+"""What a light delivers at a point (unshadowed), and the scene colour of the G-buffer.
+
+:func:`light_incidence` evaluates ``E_l(x)`` of DESIGN.md without visibility or medium:
+
+* point: ``colour·intensity · A(d)`` with ``A`` the light's distance law
+  (:mod:`vlref.lights.attenuation`), 0 beyond ``range``;
+* spot: the same times the cone law (:mod:`vlref.lights.cone`) and the cookie;
+* directional: ``colour·intensity`` (irradiance) times the tiled cookie.
+
+It returns the unit vector ``l`` from ``x`` toward the light (``-direction`` for a directional light)
+and the distance to the light (``inf`` for a directional light).
+
+:func:`scene_colour` shades each G-buffer pixel:
+``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with ``V_l`` an exact RGB shadow
+ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed ``SURFACE_OFFSET`` along the
+normal); the medium does not attenuate surface lighting here (the volumetric pass applies the view
+transmittance). Pixels that hit nothing get ``render.sky_color``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ..geometry import shadow_transmittance
+from ..numeric import cast
+from .attenuation import distance_attenuation
+from .cone import cone_falloff
+from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
+from .pack import (F_CB, F_CG, F_CK_SIZE, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER,
+                   F_HALF_OUTER, F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B,
+                   F_UX, F_UY, F_UZ, I_ATT, I_CK_FILTER, I_CK_H, I_CK_OFF, I_CK_W, I_CK_WRAP, I_CONE, I_KIND,
+                   PackedLights)
+
+__all__ = ["light_incidence", "scene_colour", "SURFACE_OFFSET"]
+
+SURFACE_OFFSET = 1e-4
+
+
+@njit(cache=True, fastmath=False)
+def light_incidence(li, lf, cookies, lut, k, x, y, z):
+    """``(lx, ly, lz, dist, er, eg, eb)`` of light ``k`` at ``(x, y, z)`` (module docstring).
+
+    Works in the float type of ``lf`` and of the point. ``E = 0`` outside the light's volume.
+    """
+    zero = cast(x, 0.0)
+    kind = li[k, I_KIND]
+    if kind == 2:
+        lx, ly, lz = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
+        e = cast(x, 1.0)
+        dist = cast(x, np.inf)
+    else:
+        wx, wy, wz = lf[k, F_PX] - x, lf[k, F_PY] - y, lf[k, F_PZ] - z
+        d2 = wx * wx + wy * wy + wz * wz
+        e = distance_attenuation(li[k, I_ATT], d2, lf[k, F_INV_RANGE2], lut)
+        if d2 == zero or e == zero:
+            return zero, zero, zero, zero, zero, zero, zero
+        dist = math.sqrt(d2)
+        lx, ly, lz = wx / dist, wy / dist, wz / dist
+        if kind == 1:
+            cos_t = -(lx * lf[k, F_DX] + ly * lf[k, F_DY] + lz * lf[k, F_DZ])
+            e *= cone_falloff(li[k, I_CONE], cos_t, lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_HALF_OUTER],
+                              lf[k, F_HALF_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B])
+            if e == zero:
+                return lx, ly, lz, dist, zero, zero, zero
+    er, eg, eb = e * lf[k, F_CR], e * lf[k, F_CG], e * lf[k, F_CB]
+    if li[k, I_CK_OFF] >= 0:
+        rx, ry, rz = x - lf[k, F_PX], y - lf[k, F_PY], z - lf[k, F_PZ]
+        xl = rx * lf[k, F_RX] + ry * lf[k, F_RY] + rz * lf[k, F_RZ]
+        yl = rx * lf[k, F_UX] + ry * lf[k, F_UY] + rz * lf[k, F_UZ]
+        if kind == 1:
+            zl = rx * lf[k, F_DX] + ry * lf[k, F_DY] + rz * lf[k, F_DZ]
+            u, v = spot_cookie_uv(xl, yl, zl, lf[k, F_TAN_HALF])
+        else:
+            u, v = directional_cookie_uv(xl, yl, lf[k, F_CK_SIZE])
+        cr, cg, cb = sample_texture(cookies, li[k, I_CK_OFF], li[k, I_CK_W], li[k, I_CK_H], li[k, I_CK_WRAP] == 1,
+                                    li[k, I_CK_FILTER] == 1, u, v)
+        er, eg, eb = er * cast(x, cr), eg * cast(x, cg), eb * cast(x, cb)
+    return lx, ly, lz, dist, er, eg, eb
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _shade(geo, li, lf, cookies, lut, position, normal, albedo, emission, hit, ambient, sky, out):
+    h, w = hit.shape
+    inv_pi = 1.0 / math.pi
+    for p in prange(h * w):
+        i, j = p // w, p % w
+        if not hit[i, j]:
+            out[i, j, 0], out[i, j, 1], out[i, j, 2] = sky[0], sky[1], sky[2]
+            continue
+        nx, ny, nz = normal[i, j, 0], normal[i, j, 1], normal[i, j, 2]
+        x = position[i, j, 0] + SURFACE_OFFSET * nx
+        y = position[i, j, 1] + SURFACE_OFFSET * ny
+        z = position[i, j, 2] + SURFACE_OFFSET * nz
+        sr, sg, sb = 0.0, 0.0, 0.0
+        for k in range(li.shape[0]):
+            lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
+            cos_n = nx * lx + ny * ly + nz * lz
+            if cos_n <= 0.0 or er + eg + eb == 0.0:
+                continue
+            vr, vg, vb = shadow_transmittance(geo, x, y, z, lx, ly, lz, dist)
+            sr += er * cos_n * vr
+            sg += eg * cos_n * vg
+            sb += eb * cos_n * vb
+        for c, s in enumerate((sr, sg, sb)):
+            out[i, j, c] = albedo[i, j, c] * (s * inv_pi + ambient[c]) + emission[i, j, c]
+
+
+def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
+    """(H, W, 3) float64 lit surfaces (module docstring)."""
+    lights = packed.astype(np.float64)
+    out = np.empty(gbuffer.albedo.shape)
+    _shade(geometry.arrays, lights.ints, lights.floats, lights.cookies, lights.lut, gbuffer.position, gbuffer.normal,
+           gbuffer.albedo, gbuffer.emission, gbuffer.object_id >= 0,
+           np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),
+           out)
+    return out

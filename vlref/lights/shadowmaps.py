@@ -1,0 +1,336 @@
+"""Shadow maps by ray casting from the lights, and their njit lookups.
+
+Storage (every map is square, ``resolution`` texels a side, row 0 at the top, texel centres at
+``(c + 0.5, r + 0.5)/res``; float32 as a GPU ``R32F`` map):
+
+* spot: one perspective map, fov = ``spot_angle``, aspect 1, near = ``shadows.near``, far = ``range``,
+  in the light frame (right, up, forward) of ``look_rotation(direction)``: texel ``(c, r)`` looks along
+  ``forward + x·tan(θ)·right + y·tan(θ)·up`` with ``x = 2(c+0.5)/res - 1``, ``y = 1 - 2(r+0.5)/res``,
+  ``θ = spot_angle/2``. Stores the RADIAL distance from the light to the first opaque surface beyond
+  the near plane (``inf`` where none lies within ``range``).
+* point: a cube map of six faces in the D3D/Unity order ``+X, -X, +Y, -Y, +Z, -Z`` (buffer suffixes
+  ``px, nx, py, ny, pz, nz``). Face ``f`` with (right, up, forward) = ``+X: (-z, +y, +x)``,
+  ``-X: (+z, +y, -x)``, ``+Y: (+x, -z, +y)``, ``-Y: (+x, +z, -y)``, ``+Z: (+x, +y, +z)``,
+  ``-Z: (-x, +y, -z)``: texel ``(c, r)`` looks along ``forward + x·right + y·up`` (x, y as above;
+  the D3D cube-map face layout). Stores radial distances like the spot map (near plane per face).
+  Lookup picks the face of the major axis of ``x - p`` (ties: x before y before z).
+* directional: ``cascades`` orthographic maps covering the view frustum from ``camera.near`` to
+  ``min(shadows.distance, camera.far)``, split at ``z_i = λ n (f/n)^{i/N} + (1-λ)(n + (f-n) i/N)``
+  (practical split scheme, Zhang et al. 2006; ``λ = split_lambda``). Cascade ``i`` is centred on the
+  bounding sphere (centre ``c_i``, radius ``r_i``) of its frustum slice and spans ``[-r_i, r_i]²`` in
+  the light's right/up axes; rays start on the plane ``c_i - back_i · forward`` (``back_i`` reaches
+  past the geometry's bounds) and the map stores the distance from that plane along the light
+  direction. A sample uses the first cascade whose sphere contains it (Unity's split spheres);
+  outside every sphere it is lit (no shadows beyond the shadow distance).
+
+Bias is applied caster-side, as Unity and GPU rasterisers do: the stored value is
+``t + bias + slope_bias · min(tan α, 10)`` with ``α`` the angle between the caster's normal and the
+map ray. A lookup is lit when ``d_ref <= stored`` (standard Z), ``d_ref`` the sample's radial
+distance (spot, point) or its distance from the cascade's ray plane (directional).
+
+Filters: ``hard`` = the texel containing the sample (nearest); ``pcf`` = the four texels around
+``(u·res - 0.5, v·res - 0.5)``, each compared, blended with bilinear weights (a GPU's 2x2 comparison
+sampler), addresses clamped to the face/map; ``exact`` = a shadow ray through the geometry
+(:func:`vlref.geometry.shadow_transmittance`, no map). Visibility ``V = 1 - strength · (1 - lit)``
+per RGB channel.
+
+Transparent occluders (``opacity < 1``): when the scene has any, each map gets a second layer per
+texel: the biased distance to the first transparent surface in front of the first opaque one
+(``inf`` if none) and the RGB transmittance of all transparent crossings in front of that opaque
+surface (``shadow_transmittance``). A tap then gives ``lit_opaque · (d_ref > d_transparent ? rgb : 1)``:
+stained glass colours the light behind it, a second-order GPU "coloured shadow map".
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit, prange
+
+from ..camera import Camera
+from ..geometry import closest_hit, shadow_transmittance
+from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
+                   PackedLights)
+
+__all__ = ["ShadowMaps", "build_shadow_maps", "shadow_visibility", "cascade_splits", "CUBE_FACES",
+           "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+
+SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
+FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
+MAX_CASCADES = 8
+MAX_SLOPE = 10.0
+
+CUBE_FACES = (("px", (0, 0, -1), (0, 1, 0), (1, 0, 0)), ("nx", (0, 0, 1), (0, 1, 0), (-1, 0, 0)),
+              ("py", (1, 0, 0), (0, 0, -1), (0, 1, 0)), ("ny", (1, 0, 0), (0, 0, 1), (0, -1, 0)),
+              ("pz", (1, 0, 0), (0, 1, 0), (0, 0, 1)), ("nz", (-1, 0, 0), (0, 1, 0), (0, 0, -1)))
+"""(suffix, right, up, forward) of each cube face, in the D3D/Unity face order."""
+_CUBE = np.array([[r, u, f] for _, r, u, f in CUBE_FACES], dtype=np.float64)  # (6, 3 axes, 3)
+
+S_MODE, S_RES, S_OFFSET, S_CASCADES = range(4)
+NSI = 4
+S_STRENGTH = 0
+S_CASC = 1  # then (cx, cy, cz, radius, back) per cascade
+NSF = 1 + 5 * MAX_CASCADES
+
+
+@dataclass
+class ShadowMaps:
+    """All shadow maps of a frame, packed for njit lookups.
+
+    ints : (n_lights, NSI) int64 (mode, resolution, first texel, cascades).
+    floats : (n_lights, NSF) float64 (strength, then centre xyz, radius, back per cascade).
+    data : (T,) float32 biased distances of every texel of every map.
+    tint : (T, 4) float32 transparent layer (biased distance, r, g, b) per texel of ``data``, or
+        (0, 4) when the scene has no transparent object.
+    names : (buffer name, light, first texel, texel count) for :meth:`buffers`.
+    """
+
+    ints: np.ndarray
+    floats: np.ndarray
+    data: np.ndarray
+    tint: np.ndarray
+    names: list = field(default_factory=list)
+
+    def buffers(self) -> dict[str, np.ndarray]:
+        """Every map as a named (res, res) float32 buffer, plus ``<name>_transparent_distance`` (res, res)
+        and ``<name>_transmittance`` (res, res, 3) for maps with a transparent layer."""
+        out = {}
+        for name, light, start, count in self.names:
+            res = int(self.ints[light, S_RES])
+            out[name] = self.data[start:start + count].reshape(res, res)
+            if self.tint.shape[0]:
+                layer = self.tint[start:start + count].reshape(res, res, 4)
+                out[name + "_transparent_distance"] = layer[:, :, 0]
+                out[name + "_transmittance"] = layer[:, :, 1:]
+        return out
+
+
+def cascade_splits(near: float, far: float, count: int, split_lambda: float) -> np.ndarray:
+    """The ``count + 1`` split depths of the practical split scheme (module docstring)."""
+    i = np.arange(count + 1) / count
+    return split_lambda * near * (far / near) ** i + (1.0 - split_lambda) * (near + (far - near) * i)
+
+
+def _slice_sphere(camera: Camera, z0: float, z1: float) -> tuple[np.ndarray, float]:
+    t = camera.tan_half_fov
+    corners = np.array([[sx * z * t * camera.aspect, sy * z * t, z] for z in (z0, z1)
+                        for sx in (-1, 1) for sy in (-1, 1)])
+    world = corners @ camera.rotation.T + camera.position
+    centre = world.mean(axis=0)
+    return centre, float(np.sqrt(((world - centre) ** 2).sum(axis=1)).max())
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _cast_map(geo, origins, dirs, start, tmax, bias, slope_bias, want_tint, out, tint):
+    """Per ray: biased distance ``start + t`` to the first opaque hit (inf if none before ``tmax``)."""
+    for k in prange(origins.shape[0]):
+        ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
+        dx, dy, dz = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, tmax[k], True)
+        if obj < 0:
+            out[k] = np.inf
+        else:
+            c = abs(nx * dx + ny * dy + nz * dz)
+            slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
+            out[k] = start[k] + t + bias + slope_bias * slope
+        if want_tint:
+            end = min(t, tmax[k])
+            tt, tobj, _nx, _ny, _nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, end, False)
+            if tobj < 0:
+                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+            else:
+                r, g, b = shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, end * (1.0 - 1e-9))
+                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
+
+
+def _grid(res: int) -> tuple[np.ndarray, np.ndarray]:
+    x = (np.arange(res) + 0.5) / res * 2.0 - 1.0
+    return np.broadcast_to(x[None, :], (res, res)).reshape(-1), np.broadcast_to(-x[:, None], (res, res)).reshape(-1)
+
+
+def _perspective(pos, right, up, fwd, scale, near, res):
+    """Rays of a perspective face, ``v = fwd + x·scale·right + y·scale·up``: origins on the near plane,
+    unit directions, and the distance from the light to each origin."""
+    x, y = _grid(res)
+    v = fwd[None, :] + (x * scale)[:, None] * right[None, :] + (y * scale)[:, None] * up[None, :]
+    length = np.linalg.norm(v, axis=1)
+    dirs = v / length[:, None]
+    start = near * length
+    return pos[None, :] + near * v, dirs, start
+
+
+def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> ShadowMaps:
+    """Ray-cast the shadow map(s) of every light with shadows (module docstring).
+
+    Lights without ``shadows`` or with ``enabled = false`` get mode ``SHADOW_NONE``; ``exact`` lights
+    get no map.
+    """
+    geo = geometry.arrays
+    want_tint = bool(np.any(geo.opacity < 1.0))
+    n = packed.count
+    ints = np.zeros((n, NSI), dtype=np.int64)
+    floats = np.zeros((n, NSF))
+    chunks, tints, names = [], [], []
+    offset = 0
+    for i, light in enumerate(scene.lights):
+        sh = light.shadows
+        if sh is None or not sh.enabled:
+            continue
+        mode = FILTER_MODES[sh.filter]
+        ints[i, S_MODE] = mode
+        floats[i, S_STRENGTH] = sh.strength
+        if mode == SHADOW_EXACT:
+            continue
+        lf = packed.floats[i].astype(np.float64)
+        pos = lf[[F_PX, F_PY, F_PZ]]
+        fwd, right, up = lf[[F_DX, F_DY, F_DZ]], lf[[F_RX, F_RY, F_RZ]], lf[[F_UX, F_UY, F_UZ]]
+        res = sh.resolution
+        faces = []  # (name, origins, dirs, start, tmax)
+        kind = int(packed.ints[i, I_KIND])
+        if kind == 1:
+            o, d, s = _perspective(pos, right, up, fwd, lf[F_TAN_HALF], sh.near, res)
+            faces.append((f"shadow_spot_{i}", o, d, s, np.maximum(light.range - s, 0.0)))
+        elif kind == 0:
+            for f, (suffix, r, u, w) in enumerate(CUBE_FACES):
+                o, d, s = _perspective(pos, _CUBE[f, 0], _CUBE[f, 1], _CUBE[f, 2], 1.0, sh.near, res)
+                faces.append((f"shadow_point_{i}_face_{suffix}", o, d, s, np.maximum(light.range - s, 0.0)))
+        else:
+            far = min(sh.distance, camera.far)
+            splits = cascade_splits(camera.near, max(far, camera.near * (1 + 1e-6)), sh.cascades, sh.split_lambda)
+            ints[i, S_CASCADES] = sh.cascades
+            corners = np.array(list(itertools.product(*zip(geometry.bounds_min, geometry.bounds_max))))
+            for k in range(sh.cascades):
+                centre, radius = _slice_sphere(camera, splits[k], splits[k + 1])
+                back = radius + max(0.0, float(((centre - corners) @ fwd).max())) + 1.0
+                x, y = _grid(res)
+                o = centre + (x * radius)[:, None] * right + (y * radius)[:, None] * up - back * fwd
+                d = np.broadcast_to(fwd, o.shape)
+                floats[i, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)
+                faces.append((f"shadow_dir_{i}_cascade_{k}", o, d, np.zeros(len(o)), np.full(len(o), back + radius)))
+        ints[i, S_RES], ints[i, S_OFFSET] = res, offset
+        for name, o, d, s, tmax in faces:
+            out = np.empty(len(o))
+            tint = np.empty((len(o) if want_tint else 0, 4))
+            _cast_map(geo, np.ascontiguousarray(o), np.ascontiguousarray(d), s, np.ascontiguousarray(tmax),
+                      sh.bias, sh.slope_bias, want_tint, out, tint)
+            chunks.append(out.astype(np.float32))
+            tints.append(tint.astype(np.float32))
+            names.append((name, i, offset, len(o)))
+            offset += len(o)
+    data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
+    tint = np.concatenate(tints) if tints else np.zeros((0, 4), dtype=np.float32)
+    return ShadowMaps(ints, floats, data, tint, names)
+
+
+@njit(cache=True, fastmath=False)
+def _tap(data, tint, base, tbase, res, col, row, d_ref):
+    k = row * res + col
+    lit = 1.0 if d_ref <= data[base + k] else 0.0
+    if tbase >= 0 and d_ref > tint[tbase + k, 0]:
+        return lit * tint[tbase + k, 1], lit * tint[tbase + k, 2], lit * tint[tbase + k, 3]
+    return lit, lit, lit
+
+
+@njit(cache=True, fastmath=False)
+def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
+    """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top)."""
+    if not pcf:
+        col = min(max(int(math.floor(u * res)), 0), res - 1)
+        row = min(max(int(math.floor(v * res)), 0), res - 1)
+        return _tap(data, tint, base, tbase, res, col, row, d_ref)
+    su, sv = u * res - 0.5, v * res - 0.5
+    fu, fv = math.floor(su), math.floor(sv)
+    wu, wv = su - fu, sv - fv
+    c0, r0 = int(fu), int(fv)
+    c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
+    r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
+    a = _tap(data, tint, base, tbase, res, c0c, r0c, d_ref)
+    b = _tap(data, tint, base, tbase, res, c1c, r0c, d_ref)
+    c = _tap(data, tint, base, tbase, res, c0c, r1c, d_ref)
+    d = _tap(data, tint, base, tbase, res, c1c, r1c, d_ref)
+    w00, w10, w01, w11 = (1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv
+    return (w00 * a[0] + w10 * b[0] + w01 * c[0] + w11 * d[0], w00 * a[1] + w10 * b[1] + w01 * c[1] + w11 * d[1],
+            w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
+
+
+@njit(cache=True, fastmath=False)
+def _cube_face(wx, wy, wz):
+    ax, ay, az = abs(wx), abs(wy), abs(wz)
+    if ax >= ay and ax >= az:
+        return 0 if wx >= 0 else 1
+    if ay >= az:
+        return 2 if wy >= 0 else 3
+    return 4 if wz >= 0 else 5
+
+
+@njit(cache=True, fastmath=False)
+def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
+    """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64)."""
+    res = sm_i[light, S_RES]
+    base = sm_i[light, S_OFFSET]
+    tbase = base if tint.shape[0] > 0 else -1
+    pcf = sm_i[light, S_MODE] == SHADOW_PCF
+    wx, wy, wz = x - float(lf[light, F_PX]), y - float(lf[light, F_PY]), z - float(lf[light, F_PZ])
+    if kind == 2:
+        for k in range(sm_i[light, S_CASCADES]):
+            j = S_CASC + 5 * k
+            cx, cy, cz = x - sm_f[light, j], y - sm_f[light, j + 1], z - sm_f[light, j + 2]
+            radius = sm_f[light, j + 3]
+            if cx * cx + cy * cy + cz * cz <= radius * radius:
+                xl = cx * lf[light, F_RX] + cy * lf[light, F_RY] + cz * lf[light, F_RZ]
+                yl = cx * lf[light, F_UX] + cy * lf[light, F_UY] + cz * lf[light, F_UZ]
+                zl = cx * lf[light, F_DX] + cy * lf[light, F_DY] + cz * lf[light, F_DZ]
+                u = 0.5 + 0.5 * xl / radius
+                v = 0.5 - 0.5 * yl / radius
+                o = base + k * res * res
+                to = tbase + k * res * res if tbase >= 0 else -1
+                return _sample_map(data, tint, o, to, res, pcf, u, v, zl + sm_f[light, j + 4])
+        return 1.0, 1.0, 1.0
+    d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if kind == 1:
+        xl = wx * lf[light, F_RX] + wy * lf[light, F_RY] + wz * lf[light, F_RZ]
+        yl = wx * lf[light, F_UX] + wy * lf[light, F_UY] + wz * lf[light, F_UZ]
+        zl = wx * lf[light, F_DX] + wy * lf[light, F_DY] + wz * lf[light, F_DZ]
+        if not zl > 0.0:
+            return 1.0, 1.0, 1.0
+        k = 0.5 / (zl * float(lf[light, F_TAN_HALF]))
+        return _sample_map(data, tint, base, tbase, res, pcf, 0.5 + xl * k, 0.5 - yl * k, d_ref)
+    f = _cube_face(wx, wy, wz)
+    rx, ry, rz = _CUBE[f, 0, 0], _CUBE[f, 0, 1], _CUBE[f, 0, 2]
+    ux, uy, uz = _CUBE[f, 1, 0], _CUBE[f, 1, 1], _CUBE[f, 1, 2]
+    ma = abs(wx * _CUBE[f, 2, 0] + wy * _CUBE[f, 2, 1] + wz * _CUBE[f, 2, 2])
+    if ma == 0.0:
+        return 1.0, 1.0, 1.0
+    sc = (wx * rx + wy * ry + wz * rz) / ma
+    tc = (wx * ux + wy * uy + wz * uz) / ma
+    o = base + f * res * res
+    to = tbase + f * res * res if tbase >= 0 else -1
+    return _sample_map(data, tint, o, to, res, pcf, 0.5 + 0.5 * sc, 0.5 - 0.5 * tc, d_ref)
+
+
+@njit(cache=True, fastmath=False)
+def shadow_visibility(sm_i, sm_f, data, tint, geo, kind, lf, light, x, y, z):
+    """Visibility (r, g, b) in [0, 1] of light ``light`` from world point ``x`` (float64), strength applied.
+
+    Mode ``SHADOW_EXACT`` traces a shadow ray toward the light (to infinity for directional lights).
+    """
+    mode = sm_i[light, S_MODE]
+    if mode == SHADOW_NONE:
+        return 1.0, 1.0, 1.0
+    if mode == SHADOW_EXACT:
+        if kind == 2:
+            r, g, b = shadow_transmittance(geo, x, y, z, -float(lf[light, F_DX]), -float(lf[light, F_DY]),
+                                           -float(lf[light, F_DZ]), np.inf)
+        else:
+            wx, wy, wz = float(lf[light, F_PX]) - x, float(lf[light, F_PY]) - y, float(lf[light, F_PZ]) - z
+            dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+            if dist == 0.0:
+                return 1.0, 1.0, 1.0
+            r, g, b = shadow_transmittance(geo, x, y, z, wx / dist, wy / dist, wz / dist, dist)
+    else:
+        r, g, b = map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z)
+    s = sm_f[light, S_STRENGTH]
+    return 1.0 - s * (1.0 - r), 1.0 - s * (1.0 - g), 1.0 - s * (1.0 - b)

@@ -1,0 +1,135 @@
+"""The physical single-scattering march (DESIGN.md "The physics"; Hillaire 2015 step integration).
+
+For each pixel (view ray ``x(t) = o + t d``, ``t ∈ [0, t_end]``, ``t_end = min(scene distance,
+render.max_distance)``) and each light ``l``:
+
+1. the segment ``[a, b]`` of the ray inside the light's volume (:mod:`vlref.march.segments`: ball of
+   radius ``range``, cone ∩ ball, or the whole ray for a directional light);
+2. ``N`` steps of ``Δ = (b - a)/N`` with samples at ``t_i = a + (i + β) Δ`` (``β`` the pixel's offset);
+3. per step, with ``σs, σt`` at the sample (:mod:`vlref.medium`):
+   ``S = σs · p(d·l) · V · T_l · E_l`` (``p`` HG with ``l`` toward the light, ``V`` shadow visibility,
+   ``T_l`` light-leg transmittance, ``E_l`` :func:`vlref.lights.shading.light_incidence`),
+   ``S_int = S · (1 - e^{-σt Δ}) / σt`` (``S · Δ`` when ``σt = 0``; computed with ``expm1``),
+   ``L += T · S_int``, then ``T *= e^{-σt Δ}``; ``T`` starts at ``exp(-τ(0, a))``.
+
+Every light adds under the same view transmittance ``T(0, t)``. The pixel's transmittance is
+``exp(-τ(0, t_end))``. Optical depths ``τ`` are analytic without noise and midpoint sums of ``N``
+sub-steps with noise (:func:`vlref.medium.optical_depth`).
+
+Light leg ``T_l`` (``light_extinction``): ``exp(-τ)`` from the sample to a point or spot light; for a
+directional light, to where the ray toward the light leaves the medium box. **An unbounded medium
+gives a directional light ``T_l = 1``**: its irradiance ``E`` is taken as the irradiance arriving at
+the sample (an infinite homogeneous medium would otherwise extinguish it completely); bound the
+medium with ``medium.bounds`` to attenuate sunlight on its way in. With noise the leg uses
+``leg_steps`` midpoint sub-steps.
+
+Order of convergence in ``Δ`` (smooth integrand): the per-step source is a rectangle rule at offset
+``β``, so the error is ``≈ (1/2 - β) Δ [f(b) - f(a)] + O(Δ²)``: first order for ``β ≠ 1/2``
+(``none``, Bayer, hash offsets), second order for ``β = 1/2`` (midpoint); the transmittance update
+is exact for a constant ``σt`` per step.
+
+Precision: the kernel is compiled for float64 and float32 inputs; in float32 every quantity of the
+march is float32 (constants through :func:`vlref.numeric.cast`, the HG value included) except
+texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
+its own) and exact shadow rays (the geometry is float64).
+
+Determinism: ``prange`` over pixels only, no cross-pixel reduction: the same bits for any thread count.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit, prange
+
+from ..numeric import cast
+from ..lights.pack import (F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND)
+from ..lights.shading import light_incidence
+from ..lights.shadowmaps import SHADOW_NONE, S_MODE, shadow_visibility
+from ..medium import M_BOUNDED, M_G, M_SS, M_ST, density, optical_depth
+from ..phase import hg
+from .segments import cone_segment, sphere_segment
+
+__all__ = ["march_physical", "light_segment"]
+
+
+@njit(cache=True, fastmath=False)
+def light_segment(li, lf, k, ox, oy, oz, dx, dy, dz, t_end):
+    """``(a, b)`` of light ``k`` on ``[0, t_end]`` (empty when ``b <= a``)."""
+    zero = cast(ox, 0.0)
+    kind = li[k, I_KIND]
+    if kind == 2:
+        return zero, t_end
+    if kind == 0:
+        return sphere_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz,
+                              zero, t_end)
+    return cone_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ],
+                        lf[k, F_COS_OUTER], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz, zero, t_end)
+
+
+@njit(cache=True, fastmath=False)
+def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data,
+                 sm_tint, geo, k, light_extinction, leg_steps):
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    zero = cast(ox, 0.0)
+    one = cast(ox, 1.0)
+    kind = li[k, I_KIND]
+    shadowed = sm_i[k, S_MODE] != SHADOW_NONE
+    leg_to_inf = kind == 2 and mp[M_BOUNDED] == zero
+    g = mp[M_G]
+    ss0, st0 = mp[M_SS], mp[M_ST]
+    trans = math.exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
+    delta = (b - a) / cast(ox, steps)
+    lr, lg, lb = zero, zero, zero
+    for i in range(steps):
+        t = a + (cast(ox, i) + beta) * delta
+        x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
+        rho = density(mp, lattice, x, y, z)
+        st = st0 * rho
+        ss = ss0 * rho
+        if ss > zero:
+            lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
+            if er + eg + eb > zero:
+                vr, vg, vb = one, one, one
+                if shadowed:
+                    fr, fg, fb = shadow_visibility(sm_i, sm_f, sm_data, sm_tint, geo, kind, lf, k, float(x),
+                                                   float(y), float(z))
+                    vr, vg, vb = cast(ox, fr), cast(ox, fg), cast(ox, fb)
+                leg = one
+                if light_extinction and not leg_to_inf:
+                    leg = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, dist, leg_steps))
+                phase = cast(ox, hg(dx * lx + dy * ly + dz * lz, g))
+                s_int = delta if st == zero else -math.expm1(-st * delta) / st
+                f = trans * ss * phase * leg * s_int
+                lr += f * er * vr
+                lg += f * eg * vg
+                lb += f * eb * vb
+        trans *= math.exp(-st * delta)
+    return lr, lg, lb
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def march_physical(origin, dirs, t_end, offsets, steps, mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data,
+                   sm_tint, geo, light_extinction, leg_steps, per_light, transmittance):
+    """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
+
+    origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
+    type, like the medium ``mp``/``lattice`` and the light floats ``lf``/``lut``. Shadow tables are
+    :class:`vlref.lights.shadowmaps.ShadowMaps` fields; ``geo`` the geometry tuple (exact shadows).
+    """
+    h, w = t_end.shape
+    n = li.shape[0]
+    for p in prange(h * w):
+        i, j = p // w, p % w
+        dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
+        te = t_end[i, j]
+        transmittance[i, j] = math.exp(-optical_depth(mp, lattice, origin[0], origin[1], origin[2], dx, dy, dz,
+                                                      cast(te, 0.0), te, steps))
+        for k in range(n):
+            a, b = light_segment(li, lf, k, origin[0], origin[1], origin[2], dx, dy, dz, te)
+            if b <= a:
+                per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = cast(te, 0.0)
+                continue
+            r, g, bl = _march_light(origin, dx, dy, dz, a, b, offsets[i, j], steps, mp, lattice, li, lf, cookies,
+                                    lut, sm_i, sm_f, sm_data, sm_tint, geo, k, light_extinction, leg_steps)
+            per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = r, g, bl

@@ -1,0 +1,196 @@
+"""The participating medium: density, and optical depth along a segment.
+
+``σs(x) = scattering · ρ(x)``, ``σt(x) = (scattering + absorption) · ρ(x)`` (1/m) with the density factor
+
+    ρ(x) = [x ∈ bounds] · fog(y) · noise(x)
+
+* ``bounds``: the optional axis-aligned box of ``medium.bounds`` (Mitsuba-style bounded medium); ρ = 0
+  outside it. Unbounded when absent.
+* ``fog(y) = exp(-(y - base) · falloff)`` (height fog; 1 without it). The exponent is capped at
+  ``FOG_MAX_EXPONENT = 60`` so that no valid input overflows (ρ ≤ e^60 far below ``base``).
+* ``noise(x) = saturate(saturate(n(p) - offset) · intensity)`` with ``p = scale · (x - velocity · time)``
+  in lattice cells (the field moves *with* the velocity; VolumetricLights samples ``s·(x + t·v)``,
+  i.e. its field moves by ``-v t``). ``n`` is our value noise: i.i.d. uniform [0, 1) values on a
+  ``period³`` lattice drawn from ``numpy.random.default_rng(seed)``, interpolated trilinearly and
+  periodic (tileable) with period ``period`` cells. Lattice values sit at cell centres, as texels of a
+  ``Texture3D`` with repeat wrap: ``n(p)`` blends the 8 values around ``p - 0.5``. Loading
+  VolumetricLights' ``NoiseVolume.bytes`` (DDS 128³ L8, voxel ``(w, h, d)`` = byte
+  ``128 + w + 128 h + 16384 d`` / 255 on lattice axes x, y, z) replaces the lattice; VL parity then
+  needs ``scale = 128 · NoiseScale``.
+
+Optical depth ``τ(t0, t1) = ∫ σt(o + t d) dt`` (:func:`optical_depth`): the segment is first clipped to
+the box; without noise it is analytic (homogeneous ``σt · L``; height fog in closed form
+``σt · L · e^m · (1 - e^-|Δ|)/|Δ|`` with ``e_a, e_b`` the fog exponents at the ends, ``m = max``,
+``Δ = e_a - e_b``); with noise it is the midpoint rule with ``n_sub`` sub-steps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from .errors import InputError
+from .numeric import cast
+
+__all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "sigma",
+           "noise_value", "clip_to_bounds", "optical_depth", "FOG_MAX_EXPONENT"]
+
+FOG_MAX_EXPONENT = 60.0
+(M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
+ M_NSCALE, M_NINT, M_NOFF, M_NSX, M_NSY, M_NSZ) = range(20)
+NM = 20
+
+
+@dataclass(frozen=True)
+class PackedMedium:
+    """``params`` (NM,) float (columns ``M_*``) and the noise lattice ``noise`` (P, P, P) float."""
+
+    params: np.ndarray
+    noise: np.ndarray
+
+    def astype(self, dtype) -> "PackedMedium":
+        return PackedMedium(self.params.astype(dtype), self.noise.astype(dtype))
+
+
+def noise_lattice(period: int, seed: int) -> np.ndarray:
+    """The (period, period, period) value-noise lattice of ``seed`` (uniform [0, 1), float64)."""
+    return np.random.default_rng(seed).random((period, period, period))
+
+
+def load_noise_volume(path: str, file: str = "<noise>", key: str = "medium.noise.path") -> np.ndarray:
+    """Read a DDS L8 volume (VolumetricLights' ``NoiseVolume.bytes``) as a lattice ``[x, y, z]`` in [0, 1]."""
+    try:
+        raw = np.fromfile(path, dtype=np.uint8)
+    except OSError as exc:
+        raise InputError(file, key, f"cannot read noise volume {path}: {exc.strerror or exc}") from None
+    if raw.size < 128 or bytes(raw[:4]) != b"DDS ":
+        raise InputError(file, key, f"{path} is not a DDS file")
+    head = raw[:128].view("<u4")
+    h, w, d = int(head[3]), int(head[4]), int(head[6])
+    if w < 1 or h < 1 or d < 1 or raw.size != 128 + w * h * d:
+        raise InputError(file, key, f"{path}: expected an 8-bit {w}x{h}x{d} volume ({128 + w * h * d} bytes), "
+                                    f"got {raw.size} bytes")
+    if not (w == h == d):
+        raise InputError(file, key, f"{path}: the noise volume must be cubic, got {w}x{h}x{d}")
+    return raw[128:].reshape(d, h, w).transpose(2, 1, 0) / 255.0
+
+
+def pack_medium(scene, dtype=np.float64) -> PackedMedium:
+    """Pack ``scene.medium`` (time and seed from ``scene.render``) for the njit kernels."""
+    m = scene.medium
+    p = np.zeros(NM)
+    p[M_SS], p[M_ST], p[M_G] = m.scattering, m.extinction, m.anisotropy
+    if m.height_fog is not None:
+        p[M_FOG], p[M_FOG_BASE], p[M_FOG_K] = 1.0, m.height_fog.base, m.height_fog.falloff
+    if m.bounds is not None:
+        p[M_BOUNDED] = 1.0
+        p[M_BX0:M_BZ0 + 1], p[M_BX1:M_BZ1 + 1] = m.bounds.min, m.bounds.max
+    lattice = np.zeros((1, 1, 1))
+    if m.noise is not None:
+        n = m.noise
+        p[M_NOISE], p[M_NSCALE], p[M_NINT], p[M_NOFF] = 1.0, n.scale, n.intensity, n.offset
+        p[M_NSX:M_NSZ + 1] = np.asarray(n.velocity) * scene.render.time
+        if n.path is not None:
+            lattice = load_noise_volume(n.path, scene.source or "<scene>")
+        else:
+            lattice = noise_lattice(n.period, scene.render.seed if n.seed is None else n.seed)
+    return PackedMedium(p.astype(dtype), np.ascontiguousarray(lattice, dtype=dtype))
+
+
+@njit(cache=True, fastmath=False)
+def noise_value(lattice, px, py, pz):
+    """Trilinear, periodic sample of ``lattice`` at ``p`` (lattice cells; values at cell centres)."""
+    n = lattice.shape[0]
+    half = cast(px, 0.5)
+    one = cast(px, 1.0)
+    cx, cy, cz = px - half, py - half, pz - half
+    fx, fy, fz = math.floor(cx), math.floor(cy), math.floor(cz)
+    wx, wy, wz = cx - fx, cy - fy, cz - fz
+    x0, y0, z0 = int(fx) % n, int(fy) % n, int(fz) % n
+    x1, y1, z1 = (x0 + 1) % n, (y0 + 1) % n, (z0 + 1) % n
+    c00 = lattice[x0, y0, z0] * (one - wx) + lattice[x1, y0, z0] * wx
+    c10 = lattice[x0, y1, z0] * (one - wx) + lattice[x1, y1, z0] * wx
+    c01 = lattice[x0, y0, z1] * (one - wx) + lattice[x1, y0, z1] * wx
+    c11 = lattice[x0, y1, z1] * (one - wx) + lattice[x1, y1, z1] * wx
+    return (c00 * (one - wy) + c10 * wy) * (one - wz) + (c01 * (one - wy) + c11 * wy) * wz
+
+
+@njit(cache=True, fastmath=False)
+def _fog_exponent(mp, y):
+    return min(-(y - mp[M_FOG_BASE]) * mp[M_FOG_K], cast(y, FOG_MAX_EXPONENT))
+
+
+@njit(cache=True, fastmath=False)
+def density(mp, lattice, x, y, z):
+    """Density factor ρ(x) ≥ 0 (module docstring)."""
+    zero = cast(x, 0.0)
+    one = cast(x, 1.0)
+    if mp[M_BOUNDED] != zero:
+        if (x < mp[M_BX0] or x > mp[M_BX1] or y < mp[M_BY0] or y > mp[M_BY1] or z < mp[M_BZ0]
+                or z > mp[M_BZ1]):
+            return zero
+    rho = one
+    if mp[M_FOG] != zero:
+        rho = math.exp(_fog_exponent(mp, y))
+    if mp[M_NOISE] != zero:
+        s = mp[M_NSCALE]
+        n = noise_value(lattice, s * (x - mp[M_NSX]), s * (y - mp[M_NSY]), s * (z - mp[M_NSZ]))
+        rho *= min(max(max(n - mp[M_NOFF], zero) * mp[M_NINT], zero), one)
+    return rho
+
+
+@njit(cache=True, fastmath=False)
+def sigma(mp, lattice, x, y, z):
+    """``(σs, σt)`` at a point (1/m)."""
+    rho = density(mp, lattice, x, y, z)
+    return mp[M_SS] * rho, mp[M_ST] * rho
+
+
+@njit(cache=True, fastmath=False)
+def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
+    """``[t0, t1]`` clipped to the medium box (slab test); empty when the result has ``a >= b``."""
+    if mp[M_BOUNDED] == cast(ox, 0.0):
+        return t0, t1
+    a, b = t0, t1
+    o3 = (ox, oy, oz)
+    d3 = (dx, dy, dz)
+    for k in range(3):
+        lo, hi = mp[M_BX0 + k], mp[M_BX1 + k]
+        if d3[k] == cast(ox, 0.0):
+            if o3[k] < lo or o3[k] > hi:
+                return t0, t0
+            continue
+        inv = cast(ox, 1.0) / d3[k]
+        ta, tb = (lo - o3[k]) * inv, (hi - o3[k]) * inv
+        a = max(a, min(ta, tb))
+        b = min(b, max(ta, tb))
+    if a >= b:
+        return t0, t0
+    return a, b
+
+
+@njit(cache=True, fastmath=False)
+def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
+    """τ = ∫_{t0}^{t1} σt(o + t d) dt for a unit direction ``d`` (module docstring); 0 for ``t1 <= t0``."""
+    zero = cast(ox, 0.0)
+    a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1)
+    length = b - a
+    if not length > zero or mp[M_ST] == zero:
+        return zero
+    if mp[M_NOISE] != zero:
+        h = length / cast(ox, n_sub)
+        acc = zero
+        for i in range(n_sub):
+            t = a + (cast(ox, i) + cast(ox, 0.5)) * h
+            acc += density(mp, lattice, ox + t * dx, oy + t * dy, oz + t * dz)
+        return mp[M_ST] * acc * h
+    if mp[M_FOG] == zero:
+        return mp[M_ST] * length
+    ea = _fog_exponent(mp, oy + a * dy)
+    eb = _fog_exponent(mp, oy + b * dy)
+    delta = abs(ea - eb)
+    ratio = cast(ox, 1.0) - cast(ox, 0.5) * delta if delta < cast(ox, 1e-6) else -math.expm1(-delta) / delta
+    return mp[M_ST] * length * math.exp(max(ea, eb)) * ratio

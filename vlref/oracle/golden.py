@@ -1,0 +1,359 @@
+"""The golden suite: vlref's own renders of every bundled scene, stored to catch any change of behaviour.
+
+``vlref golden build`` renders each *entry* (bundled scene x applicable technique) with the settings of
+``vlref/data/golden_suite.toml`` (size, steps, shadow-map size cap) and writes, under ``data/golden/``,
+``<technique>/<scene>/<buffer>.exr`` (float32, ZIP) for each listed buffer, plus ``manifest.json``:
+
+* ``format``, ``vlref_version``, ``numpy``/``numba`` versions (informative), ``suite`` (the suite file's
+  settings) and, per entry: ``name`` (``scene/technique``), ``scene``, ``technique``, ``overrides`` (the
+  ``--set`` list that reproduces it with ``vlref render``), ``scene_hash`` and ``settings`` (the resolved
+  scene, :func:`vlref.render.scene_settings_json`), ``preset``, and ``files``: buffer -> ``{path, sha256}``.
+
+``vlref golden verify`` fails (exit 1) when a golden file's sha256 differs from the manifest (tampering
+or a hand edit), a file is missing, the suite settings or the scene (``scene_hash``) changed since the
+build (stale goldens: rebuild deliberately), or a re-render differs from a golden beyond the manifest's
+tolerance preset (``float32``: last-ulp differences of exp/pow between machines pass, code changes
+fail). Exit 2: bad input (unreadable manifest, unknown option).
+
+Applicability (which techniques render which scene):
+
+* ``physical``, ``killzone``, ``slightlymad``: every scene (they march any light type);
+* ``urp``: scenes with a directional light (the URP tutorial marches the main light only);
+* ``radial``: scenes whose radial light (:func:`vlref.techniques.radial.radial_light`) projects inside
+  the frame, in front of the camera: a screen-space radial blur centred off screen (or behind the
+  camera, where the technique fades to nothing) tests only its edge clamping.
+"""
+
+from __future__ import annotations
+
+import argparse
+import fnmatch
+import hashlib
+import json
+import shutil
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .. import __version__
+from ..errors import InputError
+
+__all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
+           "main_golden", "GOLDEN_DIR", "SUITE_FILE", "MANIFEST"]
+
+SUITE_FILE = Path(__file__).resolve().parents[1] / "data" / "golden_suite.toml"
+GOLDEN_DIR = Path(__file__).resolve().parents[2] / "data" / "golden"
+MANIFEST = "manifest.json"
+FORMAT = 1
+
+
+@dataclass(frozen=True)
+class GoldenSuite:
+    """The settings of ``golden_suite.toml`` (see its comments)."""
+
+    width: int
+    height: int
+    steps: int
+    shadow_resolution: int
+    preset: str
+    buffers: tuple[str, ...]
+    techniques: tuple[str, ...]
+
+    def as_dict(self) -> dict:
+        return {"width": self.width, "height": self.height, "steps": self.steps,
+                "shadow_resolution": self.shadow_resolution, "preset": self.preset,
+                "buffers": list(self.buffers), "techniques": list(self.techniques)}
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One golden: a bundled scene under one technique, with the ``--set`` overrides that produce it."""
+
+    scene: str
+    technique: str
+    overrides: tuple[str, ...]
+
+    @property
+    def name(self) -> str:
+        return f"{self.scene}/{self.technique}"
+
+
+def load_suite(path=SUITE_FILE) -> GoldenSuite:
+    """Read and check a suite file; :class:`InputError` names the bad key."""
+    import tomllib
+
+    from ..scene.model import TECHNIQUES
+
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise InputError(str(path), "", f"unreadable suite file ({exc})") from None
+    ints = {}
+    for key in ("width", "height", "steps", "shadow_resolution"):
+        value = data.get(key)
+        if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+            raise InputError(str(path), key, f"must be an integer >= 1, got {value!r}")
+        ints[key] = value
+    from .presets import tolerance
+    preset = data.get("preset", "float32")
+    try:
+        tolerance(str(preset))
+    except InputError as exc:
+        raise InputError(str(path), "preset", exc.reason) from None
+    buffers = tuple(data.get("buffers", ("final",)))
+    techniques = tuple(data.get("techniques", TECHNIQUES))
+    bad = [t for t in techniques if t not in TECHNIQUES]
+    if bad or not techniques:
+        raise InputError(str(path), "techniques", f"must name techniques among {', '.join(TECHNIQUES)}, got {bad}")
+    if not buffers or not all(isinstance(b, str) and b.isidentifier() for b in buffers):
+        raise InputError(str(path), "buffers", f"must be a non-empty list of buffer names, got {list(buffers)}")
+    return GoldenSuite(preset=str(preset), buffers=buffers, techniques=techniques, **ints)
+
+
+def applies(scene, technique: str) -> bool:
+    """Whether ``technique`` belongs in the suite for ``scene`` (module docstring)."""
+    if technique == "urp":
+        return any(light.type == "directional" for light in scene.lights)
+    if technique == "radial":
+        from ..camera import camera_from_settings
+        from ..post.radial import light_screen_uv
+        from ..techniques.radial import radial_light
+
+        light = scene.lights[radial_light(scene)]
+        cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
+        target = (np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0]) if light.type == "directional"
+                  else np.array([*light.position, 1.0]))
+        (u, v), visible = light_screen_uv(cam.view_projection() @ target)
+        return visible > 0.0 and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
+    return True
+
+
+def _overrides(suite: GoldenSuite, scene, technique: str) -> tuple[str, ...]:
+    out = [f"render.width={suite.width}", f"render.height={suite.height}", f"render.steps={suite.steps}",
+           f'render.technique="{technique}"']
+    for i, light in enumerate(scene.lights):
+        if light.shadows is not None and light.shadows.resolution > suite.shadow_resolution:
+            out.append(f"lights.{i}.shadows.resolution={suite.shadow_resolution}")
+    return tuple(out)
+
+
+def suite_entries(suite: GoldenSuite) -> list[Entry]:
+    """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order."""
+    from ..scene import bundled_scenes, load_scene
+
+    entries = []
+    for name, path in bundled_scenes().items():
+        base = load_scene(path, [f"render.width={suite.width}", f"render.height={suite.height}"])
+        for technique in suite.techniques:
+            if applies(base, technique):
+                entries.append(Entry(name, technique, _overrides(suite, base, technique)))
+    return entries
+
+
+def render_entry(entry: Entry, buffers: Sequence[str]):
+    """``({buffer: array}, scene)`` of one entry; a buffer the technique lacks is an :class:`InputError`."""
+    from ..render import render
+    from ..scene import load_scene
+
+    scene = load_scene(entry.scene, entry.overrides)
+    result = render(scene)
+    missing = [b for b in buffers if b not in result.buffers]
+    if missing:
+        raise InputError(str(SUITE_FILE), "buffers", f"{entry.name} has no buffer(s) {', '.join(missing)}")
+    return {b: result.buffers[b] for b in buffers}, scene
+
+
+def _sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _select(entries: list[Entry], only: Sequence[str] | None) -> list[Entry]:
+    if not only:
+        return entries
+    return [e for e in entries if any(fnmatch.fnmatchcase(e.name, pattern) for pattern in only)]
+
+
+def read_manifest(golden_dir) -> dict:
+    """The manifest of ``golden_dir``; :class:`InputError` when it is missing or malformed."""
+    path = Path(golden_dir) / MANIFEST
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise InputError(str(path), "", "no golden manifest (run `vlref golden build`)") from None
+    except (OSError, json.JSONDecodeError) as exc:
+        raise InputError(str(path), "", f"unreadable manifest ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("entries"), list):
+        raise InputError(str(path), "format", f"not a vlref golden manifest of format {FORMAT}")
+    for k, e in enumerate(data["entries"]):
+        if not (isinstance(e, dict) and isinstance(e.get("name"), str) and isinstance(e.get("files"), dict)):
+            raise InputError(str(path), f"entries[{k}]", "needs a name and files")
+    return data
+
+
+def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
+          log=print) -> dict:
+    """Render the suite (or the ``only`` glob patterns of entry names) into ``golden_dir``; returns the manifest.
+
+    With ``only``, the other entries of an existing manifest are kept. Files of entries no longer in the
+    suite are removed. All files are written atomically (:func:`vlref.io.output_dir`).
+    """
+    import numba
+
+    from ..io import output_dir, write_exr, write_text
+
+    suite = load_suite(suite_path)
+    golden_dir = Path(golden_dir)
+    entries = suite_entries(suite)
+    selected = _select(entries, only)
+    old = {}
+    if only and (golden_dir / MANIFEST).exists():
+        old = {e["name"]: e for e in read_manifest(golden_dir)["entries"]}
+    records = {}
+    with output_dir(golden_dir) as tmp:
+        for entry in selected:
+            start = time.perf_counter()
+            buffers, scene = render_entry(entry, suite.buffers)
+            from ..render import scene_hash, scene_settings_json
+            record = {"name": entry.name, "scene": entry.scene, "technique": entry.technique,
+                      "overrides": list(entry.overrides), "scene_hash": scene_hash(scene),
+                      "settings": json.loads(scene_settings_json(scene)), "preset": suite.preset, "files": {}}
+            meta = {"scene_hash": record["scene_hash"], "technique": entry.technique, "golden": entry.name}
+            for name, array in buffers.items():
+                rel = f"{entry.technique}/{entry.scene}/{name}.exr"
+                (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
+                write_exr(tmp / rel, array, metadata=meta)
+                record["files"][name] = {"path": rel, "sha256": _sha256(tmp / rel)}
+            records[entry.name] = record
+            log(f"built {entry.name} ({time.perf_counter() - start:.2f} s)")
+        kept = [old[e.name] if e.name not in records else records[e.name] for e in entries
+                if e.name in records or e.name in old]
+        manifest = {"format": FORMAT, "vlref_version": __version__, "numpy": np.__version__,
+                    "numba": numba.__version__, "suite": suite.as_dict(), "entries": kept}
+        write_text(tmp / MANIFEST, json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    keep = {f["path"] for e in manifest["entries"] for f in e["files"].values()}
+    for e in old.values():  # entries left out of the suite: remove their files (only ours)
+        for f in e["files"].values():
+            if f["path"] not in keep:
+                (golden_dir / f["path"]).unlink(missing_ok=True)
+    for folder in sorted((p for p in golden_dir.rglob("*") if p.is_dir()), reverse=True):
+        if not any(folder.iterdir()):
+            shutil.rmtree(folder)
+    return manifest
+
+
+@dataclass
+class Outcome:
+    """The verdict on one entry: ``problems`` empty = pass; ``margins`` buffer -> failing fraction / bound."""
+
+    name: str
+    problems: list
+    margins: dict
+
+
+def _check_files(golden_dir: Path, record: dict) -> list[str]:
+    problems = []
+    for buf, f in record["files"].items():
+        path = golden_dir / str(f.get("path", ""))
+        if not path.is_file():
+            problems.append(f"{buf}: golden file {path} missing")
+        elif _sha256(path) != f.get("sha256"):
+            problems.append(f"{buf}: checksum of {path} differs from the manifest (tampered or edited; "
+                            "rebuild deliberately with `vlref golden build`)")
+    return problems
+
+
+def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
+           preset: str | None = None, log=print) -> list[Outcome]:
+    """Check checksums, staleness and re-renders of the goldens (module docstring); one outcome per entry."""
+    from ..io import read_image
+    from ..render import scene_hash
+    from .compare import compare_arrays
+
+    golden_dir = Path(golden_dir)
+    manifest = read_manifest(golden_dir)
+    suite = load_suite(suite_path)
+    outcomes = []
+    if manifest.get("suite") != suite.as_dict():
+        outcomes.append(Outcome("<suite>", [f"suite settings changed since the build: manifest "
+                                            f"{manifest.get('suite')} vs {suite_path} {suite.as_dict()}"], {}))
+    expected = {e.name: e for e in _select(suite_entries(suite), only)}
+    recorded = {e["name"]: e for e in manifest["entries"]}
+    for name in expected.keys() - recorded.keys():
+        outcomes.append(Outcome(name, ["in the suite but not in the manifest (rebuild)"], {}))
+    if not only:
+        for name in recorded.keys() - expected.keys():
+            outcomes.append(Outcome(name, ["in the manifest but no longer in the suite (rebuild)"], {}))
+    for name in sorted(expected.keys() & recorded.keys()):
+        record, entry = recorded[name], expected[name]
+        start = time.perf_counter()
+        problems = _check_files(golden_dir, record)
+        margins = {}
+        if list(entry.overrides) != record.get("overrides"):
+            problems.append(f"overrides changed: manifest {record.get('overrides')} vs suite {list(entry.overrides)}")
+        if not problems:
+            buffers, scene = render_entry(entry, list(record["files"]))
+            if scene_hash(scene) != record.get("scene_hash"):
+                problems.append("the scene changed since the build (scene_hash differs); rebuild deliberately")
+            tol = preset or record.get("preset", suite.preset)
+            for buf, array in buffers.items():
+                ref = read_image(golden_dir / record["files"][buf]["path"])
+                test = np.asarray(array, dtype=np.float64)
+                mask = np.isfinite(ref).all(axis=2)
+                report = compare_arrays(ref, test, tol, mask, flip=False,
+                                        names=(str(golden_dir / record["files"][buf]["path"]), f"{name} {buf}"))
+                frac, bound = report.metrics["frac_failing"], report.tolerance.max_fail_fraction
+                margins[buf] = (frac, bound, report.metrics["max_abs"])
+                if not report.passed:
+                    problems.append(f"{buf}: differs beyond preset {tol}: " + report.summary().replace("\n", "; "))
+        outcomes.append(Outcome(name, problems, margins))
+        state = "ok" if not problems else "FAILED"
+        log(f"{state:6s} {name} ({time.perf_counter() - start:.2f} s)" +
+            "".join(f"\n       {p}" for p in problems))
+    return outcomes
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="vlref golden", description="Build or verify the golden suite "
+                                "(verify: exit 0 pass, 1 fail, 2 bad input).")
+    p.add_argument("action", choices=("build", "verify", "list"))
+    p.add_argument("--dir", default=str(GOLDEN_DIR), help=f"golden folder (default {GOLDEN_DIR})")
+    p.add_argument("--suite", default=str(SUITE_FILE), help="suite file (default: vlref/data/golden_suite.toml)")
+    p.add_argument("--only", action="append", metavar="GLOB",
+                   help="entries whose name (scene/technique) matches, e.g. 'pillars/*' (repeatable)")
+    p.add_argument("--preset", help="verify: tolerance preset instead of the manifest's")
+    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
+    return p
+
+
+def main_golden(argv: Sequence[str]) -> int:
+    """``vlref golden build|verify|list``: 0 success / pass, 1 verify failed, 2 bad input."""
+    try:
+        args = _parser().parse_args(list(argv))
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    log = (lambda *a, **k: None) if args.quiet else print
+    start = time.perf_counter()
+    try:
+        if args.action == "list":
+            for e in _select(suite_entries(load_suite(args.suite)), args.only):
+                print(f"{e.name:32s} {' '.join(e.overrides)}")
+            return 0
+        if args.action == "build":
+            manifest = build(args.dir, args.suite, args.only, log)
+            size = sum(p.stat().st_size for p in Path(args.dir).rglob("*") if p.is_file())
+            print(f"golden build: {len(manifest['entries'])} entries, {size / 1e6:.2f} MB in {args.dir} "
+                  f"({time.perf_counter() - start:.1f} s)")
+            return 0
+        outcomes = verify(args.dir, args.suite, args.only, args.preset, log)
+    except InputError as exc:
+        print(f"vlref golden: error: {exc}", file=sys.stderr)
+        return 2
+    failed = [o for o in outcomes if o.problems]
+    print(f"golden verify: {len(outcomes) - len(failed)} of {len(outcomes)} passed "
+          f"({time.perf_counter() - start:.1f} s)" + (f"; FAILED: {', '.join(o.name for o in failed)}" if failed else ""))
+    return 1 if failed else 0

@@ -1,0 +1,118 @@
+"""Tolerance presets for image comparison, loaded from ``vlref/data/presets.toml``.
+
+The pass/fail rule (Unity's graphics test framework and Filament's renderdiff combine the same three
+knobs), evaluated over the compared pixels:
+
+* a pixel fails when ``|t_c - r_c| > abs_tol * S + rel_tol * |r_c|`` in any channel ``c``;
+* the image passes when the failing fraction ``<= max_fail_fraction`` and the mean absolute error
+  ``<= max_mean_abs * S`` (and, when ``max_flip_mean`` is set and FLIP is available, the mean
+  HDR-FLIP ``<= max_flip_mean``).
+
+``S`` is the scale: ``"absolute"`` -> 1, ``"mean"`` -> the mean ``|ref|`` over the compared values
+(so an all-zero reference under ``"mean"`` demands an exact match).
+The data file documents the reasoning behind each preset's numbers.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import sys
+from dataclasses import dataclass
+from functools import lru_cache
+from importlib import resources
+from typing import Mapping
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+from ..errors import InputError
+
+__all__ = ["Tolerance", "SCALES", "load_presets", "tolerance", "PRESETS_FILE"]
+
+SCALES = ("absolute", "mean")
+PRESETS_FILE = "data/presets.toml"
+_SOURCE = "<command line>"
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """The knobs of the pass/fail rule (see the module docstring); tolerances are >= 0."""
+
+    abs_tol: float
+    rel_tol: float
+    max_fail_fraction: float
+    max_mean_abs: float
+    max_flip_mean: float | None = None
+    scale: str = "absolute"
+    name: str = "custom"
+    description: str = ""
+
+    def __post_init__(self):
+        for key in ("abs_tol", "rel_tol", "max_fail_fraction", "max_mean_abs", "max_flip_mean"):
+            value = getattr(self, key)
+            if value is None and key == "max_flip_mean":
+                continue
+            if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+                    or value < 0:
+                raise InputError(_SOURCE, key, f"must be a finite number >= 0, got {value!r}")
+        if self.max_fail_fraction > 1:
+            raise InputError(_SOURCE, "max_fail_fraction", f"is a fraction in [0, 1], got {self.max_fail_fraction}")
+        if self.scale not in SCALES:
+            raise InputError(_SOURCE, "scale", f"must be one of {', '.join(SCALES)}, got {self.scale!r}")
+
+
+_KNOBS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.name != "name")
+
+
+def _suggest(word: str, options) -> str:
+    close = difflib.get_close_matches(word, list(options), n=1)
+    return f", did you mean {close[0]}?" if close else f" (known: {', '.join(options)})"
+
+
+def _coerce(key: str, value) -> object:
+    """A knob's value from TOML or from a ``--set key=value`` string."""
+    if key not in _KNOBS:
+        raise InputError(_SOURCE, key, "unknown tolerance key" + _suggest(key, _KNOBS))
+    if key in ("scale", "description"):
+        return str(value)
+    if key == "max_flip_mean" and (value is None or str(value).strip().lower() in ("none", "off", "")):
+        return None
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            raise InputError(_SOURCE, key, f"not a number: {value!r}") from None
+    if isinstance(value, bool):
+        raise InputError(_SOURCE, key, f"not a number: {value!r}")
+    return value
+
+
+@lru_cache(maxsize=1)
+def load_presets() -> dict[str, Tolerance]:
+    """All presets of the data file, by name."""
+    text = resources.files("vlref").joinpath(PRESETS_FILE).read_text(encoding="utf-8")
+    table = tomllib.loads(text)
+    out = {}
+    for name, knobs in table.items():
+        values = {k: _coerce(k, v) for k, v in knobs.items()}
+        out[name] = Tolerance(name=name, **values)
+    return out
+
+
+def tolerance(preset: str = "float32", overrides: Mapping[str, object] | None = None) -> Tolerance:
+    """The named preset with ``overrides`` (``{"rel_tol": 0.02}`` or string values) applied.
+
+    Raises :class:`InputError` for an unknown preset or key and for invalid values.
+    """
+    presets = load_presets()
+    if preset not in presets:
+        raise InputError(_SOURCE, "preset", f"unknown preset {preset!r}" + _suggest(preset, presets))
+    base = presets[preset]
+    if not overrides:
+        return base
+    changes = {k: _coerce(k, v) for k, v in overrides.items()}
+    return dataclasses.replace(base, name=f"{preset}+overrides", **changes)

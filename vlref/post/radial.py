@@ -1,0 +1,239 @@
+"""Screen-space radial blur toward the light: GPU Gems 3 ch. 13 (Mitchell) and disenone's Unity port.
+
+Coordinates: the image's own uv, ``u = (x + 0.5) / W`` right and ``v = (y + 0.5) / H`` *down*
+(row 0 = top). The loop is linear in uv and the bilinear sampler is symmetric, so the result does
+not depend on the uv orientation as long as the light's uv is given in the same convention
+(:func:`light_screen_uv` does this from clip space).
+
+Listing 13-1 (research §3.2), per pixel ``u`` with light ``l``:
+
+    delta = (u - l) * (1/n * Density);  C = tex(u);  dec = 1
+    repeat n times:  u -= delta;  C += tex(u) * (dec * Weight);  dec *= Decay
+    out = C * Exposure
+
+i.e. ``C = tex(u) + Weight sum_{i=1..n} Decay^(i-1) tex(u - i delta)``: the initial sample is
+unweighted and undecayed; with ``Density = 1`` the last tap lands on the light.
+
+Sampling is bilinear at uv with clamp addressing by default (the chapter and the Unity RTs leave the
+wrap mode open [U]; ``"repeat"`` and ``"border"`` (zero outside) are offered). A light **off
+screen** needs nothing special: the taps run outside ``[0, 1]`` and read the clamped edge. A light
+**behind the camera** (clip ``w <= 0``) has no meaningful screen position; :func:`light_screen_uv`
+then returns visibility 0, and ``radial_blur(..., visibility=0)`` is exactly 0 -- the effect is off.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from vlref.errors import InputError
+from vlref.post.resolution import ARGUMENTS, check_choice
+
+ADDRESS_MODES = ("clamp", "repeat", "border")
+
+
+def _image(image) -> np.ndarray:
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim not in (2, 3):
+        raise InputError(ARGUMENTS, "image", f"expected (H, W) or (H, W, C), got shape {a.shape}")
+    return a
+
+
+@njit(cache=True, fastmath=False)
+def _texel(i, n, mode):
+    """Texel index after addressing (0 clamp, 1 repeat, 2 border) and whether it reads the image."""
+    if mode == 1:
+        return i % n, True
+    inside = 0 <= i < n
+    return min(max(i, 0), n - 1), inside or mode == 0
+
+
+@njit(cache=True, fastmath=False)
+def _fetch_add(img, u, v, mode, w, acc):
+    """``acc[ch] += w * bilinear(img, u, v)[ch]``; bilinear as ``a + t (b - a)`` along x, then y."""
+    H, W = img.shape[0], img.shape[1]
+    x = u * W - 0.5
+    y = v * H - 0.5
+    xf, yf = math.floor(x), math.floor(y)
+    tx, ty = x - xf, y - yf
+    xa, ina = _texel(int(xf), W, mode)
+    xb, inb = _texel(int(xf) + 1, W, mode)
+    ya, jna = _texel(int(yf), H, mode)
+    yb, jnb = _texel(int(yf) + 1, H, mode)
+    for ch in range(img.shape[2]):
+        t00 = img[ya, xa, ch] if (ina and jna) else 0.0
+        t10 = img[ya, xb, ch] if (inb and jna) else 0.0
+        t01 = img[yb, xa, ch] if (ina and jnb) else 0.0
+        t11 = img[yb, xb, ch] if (inb and jnb) else 0.0
+        top = t00 + tx * (t10 - t00)
+        bottom = t01 + tx * (t11 - t01)
+        acc[ch] = acc[ch] + (top + ty * (bottom - top)) * w
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _sample_kernel(img, u, v, mode):
+    out = np.zeros((u.size, img.shape[2]))
+    for p in prange(u.size):
+        _fetch_add(img, u[p], v[p], mode, 1.0, out[p])
+    return out
+
+
+def bilinear_sample(image, u, v, address: str = "clamp") -> np.ndarray:
+    """Bilinear texture fetch of ``image`` at uv arrays ``u``, ``v`` (same shape ``S``) -> ``S`` or ``S + (C,)``.
+
+    Texel coordinate ``x = u W - 1/2``, ``x0 = floor(x)``, ``t = x - x0``; the four texels are
+    combined as ``a + t (b - a)`` along x, then along y (a constant image stays exactly constant).
+    ``border`` reads 0 outside the image.
+    """
+    check_choice("address", address, ADDRESS_MODES)
+    img = _image(image)
+    u, v = np.broadcast_arrays(np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64))
+    img3 = img if img.ndim == 3 else img[..., None]
+    out = _sample_kernel(np.ascontiguousarray(img3), u.ravel().copy(), v.ravel().copy(), ADDRESS_MODES.index(address))
+    return out.reshape(u.shape + img.shape[2:])
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _radial_kernel(img, lu, lv, scale, iterations, weight, tap_scale, decay, mode):
+    H, W, C = img.shape
+    out = np.zeros((H * W, C))
+    for p in prange(H * W):
+        u = (p % W + 0.5) / W
+        v = (p // W + 0.5) / H
+        du = (u - lu) * scale
+        dv = (v - lv) * scale
+        _fetch_add(img, u, v, mode, 1.0, out[p])
+        dec = 1.0
+        for _ in range(iterations):
+            u = u - du
+            v = v - dv
+            _fetch_add(img, u, v, mode, dec * tap_scale * weight, out[p])
+            dec = dec * decay
+    return out.reshape((H, W, C))
+
+
+def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float, weight: float, tap_scale: float,
+                 decay: float, address: str) -> np.ndarray:
+    """``C = tex(u) + sum_{i=1..iterations} tex(u - i delta) * ((dec_i * tap_scale) * weight)``.
+
+    ``delta = (u - l) * (1/divisor * density)``, ``u`` stepped by repeated subtraction, as the shaders do.
+    """
+    check_choice("address", address, ADDRESS_MODES)
+    img = _image(image)
+    if divisor < 1 or iterations < 0:
+        raise InputError(ARGUMENTS, "num_samples", f"need at least one sample, got {divisor}")
+    if not np.isfinite(light_uv).all():
+        raise InputError(ARGUMENTS, "light_uv", f"must be finite, got {light_uv!r} (use light_screen_uv)")
+    img3 = np.ascontiguousarray(img if img.ndim == 3 else img[..., None])
+    out = _radial_kernel(img3, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
+                         float(weight), float(tap_scale), float(decay), ADDRESS_MODES.index(address))
+    return out if img.ndim == 3 else out[..., 0]
+
+
+def radial_blur(image, light_uv, num_samples: int, density: float, weight: float, decay: float, exposure: float,
+                address: str = "clamp", visibility: float = 1.0) -> np.ndarray:
+    """GPU Gems 3 Listing 13-1 on ``image`` (the occlusion buffer), times ``exposure * visibility``.
+
+    The book gives no defaults; the common ones (Sanglard's port: 100 samples, density 0.84,
+    weight 5.65, decay 1.0, exposure 0.0034) are in ``vlref.scene.technique_params.RadialParams``.
+    Output shape = ``image``'s; add it to the scene with ``composite.composite_add``.
+    """
+    c = _radial_loop(image, light_uv, num_samples, num_samples, density, weight, 1.0, decay, address)
+    return (c * exposure) * visibility
+
+
+def disenone_scatter(radiated, light_uv, density: float = 1.0, weight: float = 1.0 / 32.0, decay: float = 1.0,
+                     num_samples: int = 32, iterations: int = 31, tap_scale: float = 0.03125,
+                     address: str = "clamp") -> np.ndarray:
+    """disenone's ``LightScattering`` loop (research §3.4) on the radiated occlusion, before exposure.
+
+    ``delta = (u - l) * (1/32 * density)``; the initial term is ``tex(u)``; then **31** steps of
+    ``u -= delta``, ``+= tex(u) * ((dec * 0.03125) * weight)``, ``dec *= decay`` -- so the last tap
+    stops one step short of the light, and with the C# default ``weight = 1/32`` each tap weighs
+    1/1024. The scene is *not* blurred: composite with
+    ``composite_add(scene, light, disenone_exposure(...))``.
+    """
+    return _radial_loop(radiated, light_uv, num_samples, iterations, density, weight, tap_scale, decay, address)
+
+
+def _pixel_uv(H: int, W: int):
+    """uv of every pixel centre, (H, W) each."""
+    u = (np.arange(W, dtype=np.float64)[None, :] + 0.5) / W
+    v = (np.arange(H, dtype=np.float64)[:, None] + 0.5) / H
+    return np.broadcast_to(u, (H, W)), np.broadcast_to(v, (H, W))
+
+
+def radiate(occlusion, light_uv, radius_px: float = 100.0, peak: float = 0.5) -> np.ndarray:
+    """disenone's ``LightRadiate`` pass: ``occ * saturate((R^2 - |d|^2) / R^2 * peak)``.
+
+    ``d = ((u - l_u) W, (v - l_v) H)`` is the offset in *pixels of this target* (so the disc is
+    round whatever the aspect), ``R = 100`` px (set by the C#; the material default is 50), peak
+    0.5 at the light; ``occlusion`` is (H, W) or (H, W, C).
+    """
+    occ = _image(occlusion)
+    H, W = occ.shape[:2]
+    u, v = _pixel_uv(H, W)
+    dx, dy = (u - light_uv[0]) * W, (v - light_uv[1]) * H
+    r2 = radius_px * radius_px
+    rho = np.clip((r2 - (dx * dx + dy * dy)) / r2 * peak, 0.0, 1.0)
+    return occ * (rho[..., None] if occ.ndim == 3 else rho)
+
+
+def disenone_exposure(exposure: float, angle_deg: float, half_fov_deg: float) -> float:
+    """disenone's exposure dimming (research §3.4): 0 when ``angle + half_fov >= 90``, else
+    ``exposure * (1 - (max(angle, half_fov) - half_fov) / half_fov)``.
+
+    ``angle_deg`` is the angle between the camera forward and the direction to the light,
+    ``half_fov_deg`` half the vertical field of view. Kept as the source has it: beyond
+    ``angle = 2 half_fov`` the factor is negative (the effect subtracts light).
+    """
+    if angle_deg + half_fov_deg >= 90.0:
+        return 0.0
+    return exposure * (1.0 - (max(angle_deg, half_fov_deg) - half_fov_deg) / half_fov_deg)
+
+
+def light_screen_uv(clip) -> tuple[tuple[float, float], float]:
+    """Screen uv (row 0 = top) of a clip-space position ``(x, y, z, w)`` and its visibility factor.
+
+    ``w > 0`` (in front of the camera): ``u = (x/w + 1) / 2``, ``v = (1 - y/w) / 2`` -- possibly
+    outside ``[0, 1]`` when the light is off screen -- and visibility 1. ``w <= 0`` (behind the
+    camera or in its plane): uv ``(0.5, 0.5)`` and visibility 0. A directional light's position is
+    the point at infinity toward it, clip ``= VP @ (-direction, 0)``.
+    """
+    x, y, _, w = (float(c) for c in clip)
+    if not w > 0.0 or not math.isfinite(x / w) or not math.isfinite(y / w):
+        return (0.5, 0.5), 0.0
+    return ((x / w + 1.0) * 0.5, (1.0 - y / w) * 0.5), 1.0
+
+
+def occlusion_opaque(object_id, sky: float = 1.0) -> np.ndarray:
+    """The occlusion pre-pass for opaque geometry: ``sky`` where nothing was hit (``object_id < 0``), 0 on objects."""
+    oid = np.asarray(object_id)
+    return np.where(oid < 0, sky, 0.0)
+
+
+OCCLUSION_TRANSPARENCY = ("filter", "disenone")
+
+
+def occlusion_transparent(occlusion, alpha, tint=None, mode: str = "filter") -> np.ndarray:
+    """Lay one transparent layer (``alpha`` (H, W), 0 where absent or behind the opaque surface) over ``occlusion``.
+
+    * ``"filter"``: the light the layer lets through, ``occ * (1 - alpha) * tint`` (``tint`` (H, W, 3)
+      or RGB; white if ``None``) -- the chapter's "transparent objects occlude by their opacity".
+    * ``"disenone"``: the port draws ``(1 - alpha)`` white with ``Blend SrcAlpha OneMinusSrcAlpha``,
+      ``occ' = alpha (1 - alpha) + (1 - alpha) occ``, i.e. ``1 - alpha^2`` over the white background;
+      ``tint`` is ignored.
+
+    Layers are applied back to front. Returns (H, W, 3).
+    """
+    check_choice("mode", mode, OCCLUSION_TRANSPARENCY)
+    occ = _image(occlusion)
+    if occ.ndim == 2:
+        occ = np.repeat(occ[..., None], 3, axis=2)
+    a = np.asarray(alpha, dtype=np.float64)[..., None]
+    if mode == "disenone":
+        return a * (1.0 - a) + (1.0 - a) * occ
+    t = np.ones(3) if tint is None else np.asarray(tint, dtype=np.float64)
+    return occ * (1.0 - a) * t

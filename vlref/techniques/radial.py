@@ -1,0 +1,133 @@
+"""The ``radial`` technique: GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port (seed 004),
+research §3.
+
+Passes (buffers at the occlusion target's size ``W_o x H_o``; ``H_o = occlusion_height`` or the frame
+height, ``W_o = floor(H_o · aspect)``):
+
+1. ``occlusion``: 1 where the camera ray leaves the scene, 0 on opaque surfaces, and through
+   transparent occluders the light they pass: ``gpugems`` the RGB transmittance ``Π (1 - opacity) tint``
+   of the transparent surfaces in front of the first opaque one; ``disenone`` its replacement shaders
+   over a white background, ``α (1 - α) + (1 - α) occ`` with ``α = 1 - mean transmittance`` (one layer);
+2. ``light_image``: ``gpugems`` the occlusion times the light's colour x intensity inside a disc of
+   ``light_radius`` pixels around the light's screen position (the chapter's pre-pass: light bright,
+   occluders black) [U: the disc is ours]; ``disenone`` ``radiate`` (peak 0.5, parabolic falloff, white);
+3. ``radial``: the radial loop, Listing 13-1 (``radial_blur``) or disenone's 32-tap variant
+   (``disenone_scatter``), before exposure;
+4. ``inscatter`` = radial x exposure (x the fade factor, x visibility), bilinearly upsampled to the
+   frame when the target is smaller; ``final`` = scene + inscatter; ``transmittance`` = 1.
+
+Light position: a directional light is the point at infinity ``-direction``; a light behind the camera
+gives visibility 0 (no effect); an off-screen light keeps its off-screen uv (taps clamp to the edge).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from ..geometry import raycast, shadow_transmittance
+from ..post.composite import composite_add
+from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, radial_blur, radiate)
+from ..post.upsample import bilinear_upsample
+
+__all__ = ["render", "radial_light", "variant_params", "occlusion_buffer", "VARIANT_DEFAULTS"]
+
+VARIANT_DEFAULTS = {
+    "gpugems": dict(num_samples=100, density=0.84, weight=5.65, decay=1.0, exposure=0.0034, fade=False),
+    "disenone": dict(num_samples=32, density=1.0, weight=1.0 / 32.0, decay=1.0, exposure=0.8, fade=True),
+}
+"""gpugems: F. Sanglard's GLSL port (NOT the book's, which has none); disenone: its C# ``Params``."""
+GPUGEMS_DISC_FRACTION = 0.05
+DISENONE_RADIUS_PX = 100.0
+
+
+def variant_params(p) -> dict:
+    """The effective loop parameters: each unset (None) field takes its variant's default."""
+    out = dict(VARIANT_DEFAULTS[p.variant])
+    for k in out:
+        if getattr(p, k) is not None:
+            out[k] = getattr(p, k)
+    return out
+
+
+def radial_light(scene) -> int:
+    """``techniques.radial.light``, or the first directional light, or light 0."""
+    p = scene.techniques.radial
+    if p.light >= 0:
+        if p.light >= len(scene.lights):
+            from ..errors import InputError
+
+            raise InputError(scene.source or "<scene>", "techniques.radial.light",
+                             f"no light {p.light} (the scene has {len(scene.lights)})")
+        return p.light
+    return next((i for i, l in enumerate(scene.lights) if l.type == "directional"), 0)
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _transparent_pass(geo, cam, dirs, t_opaque):
+    """RGB transmittance of the transparent surfaces in front of each pixel's opaque hit, prange over pixels."""
+    h, w = t_opaque.shape
+    out = np.ones((h, w, 3))
+    for p in prange(h * w):
+        r, c = p // w, p % w
+        tr, tg, tb = shadow_transmittance(geo, cam[0], cam[1], cam[2], dirs[r, c, 0], dirs[r, c, 1], dirs[r, c, 2],
+                                          t_opaque[r, c])
+        out[r, c, 0], out[r, c, 1], out[r, c, 2] = tr, tg, tb
+    return out
+
+
+def occlusion_buffer(scene, frame, width: int, height: int, variant: str) -> np.ndarray:
+    """The occlusion pre-pass (module docstring, pass 1), (height, width, 3)."""
+    cam = frame.camera
+    g = frame.gbuffer if (width, height) == (cam.width, cam.height) else raycast(scene, cam.with_size(width, height),
+                                                                                  frame.geometry)
+    dirs = cam.ray_directions(width, height)
+    t_opaque = np.where(np.isfinite(g.distance), g.distance, 1e30)
+    trans = _transparent_pass(frame.geometry.arrays, np.asarray(cam.position, dtype=np.float64), dirs, t_opaque)
+    sky = (g.object_id < 0).astype(np.float64)[..., None]
+    if variant == "gpugems":
+        return sky * trans
+    alpha = 1.0 - trans.mean(axis=2, keepdims=True)
+    return np.repeat(alpha * (1.0 - alpha) + (1.0 - alpha) * sky, 3, axis=2)
+
+
+def render(scene, frame) -> dict:
+    """Render the radial technique of ``scene`` (module docstring)."""
+    p = scene.techniques.radial
+    v = variant_params(p)
+    cam = frame.camera
+    H, W = cam.height, cam.width
+    ho = p.occlusion_height or H
+    wo = max(1, int(math.floor(ho * cam.aspect))) if p.occlusion_height else W
+    li = radial_light(scene)
+    light = scene.lights[li]
+    if light.type == "directional":
+        target = np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0])
+    else:
+        target = np.array([*light.position, 1.0])
+    uv, visibility = light_screen_uv(cam.view_projection() @ target)
+    occ = occlusion_buffer(scene, frame, wo, ho, p.variant)
+
+    to_light = target[:3] if light.type == "directional" else target[:3] - cam.position
+    cos_a = float(to_light @ cam.forward) / float(np.linalg.norm(to_light))
+    angle = math.degrees(math.acos(min(1.0, max(-1.0, cos_a))))
+    exposure = disenone_exposure(v["exposure"], angle, cam.fov / 2.0) if v["fade"] else v["exposure"]
+    if p.variant == "gpugems":
+        radius = p.light_radius if p.light_radius is not None else GPUGEMS_DISC_FRACTION * ho
+        u, vv = (np.arange(wo) + 0.5) / wo, (np.arange(ho) + 0.5) / ho
+        r2 = ((u[None, :] - uv[0]) * wo) ** 2 + ((vv[:, None] - uv[1]) * ho) ** 2
+        colour = np.asarray(light.color, dtype=np.float64) * light.intensity
+        image = occ * (r2 <= radius * radius)[..., None] * colour
+        rad = radial_blur(image, uv, v["num_samples"], v["density"], v["weight"], v["decay"], 1.0)
+    else:
+        radius = p.light_radius if p.light_radius is not None else DISENONE_RADIUS_PX
+        image = radiate(occ, uv, radius)
+        rad = disenone_scatter(image, uv, v["density"], v["weight"], v["decay"], v["num_samples"],
+                               v["num_samples"] - 1)
+    light_lo = rad * (exposure * visibility)
+    inscatter = light_lo if (wo, ho) == (W, H) else bilinear_upsample(light_lo, (H, W))
+    return {"occlusion": occ, "light_image": image, "radial": rad, "inscatter": inscatter,
+            "transmittance": np.ones((H, W)), "final": composite_add(frame.scene_colour, inscatter),
+            "composite": composite_add(frame.scene_colour, inscatter)}
