@@ -24,6 +24,8 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 
+from pathlib import Path
+
 import numpy as np
 
 from .quadrature import ReferenceResult, render_reference
@@ -45,6 +47,34 @@ class BiasReport:
     slope: float = float("nan")
     fit_rows: int = 0
     reference_max_error: float = 0.0
+
+    def summary(self) -> str:
+        """A plain-text table: error against steps, the fitted order, where the error sits."""
+        lines = [f"technique {self.technique}: mean relative error {self.mean_rel:.3e}, "
+                 f"max relative error {self.max_rel:.3e} at {self.table[0]['steps']} steps",
+                 f"reference error bound {self.reference_max_error:.2e}",
+                 f"{'steps':>6} {'mean_abs':>11} {'max_abs':>11} {'mean_rel':>11} {'max_rel':>11}"]
+        lines += [f"{r['steps']:>6} {r['mean_abs']:>11.4e} {r['max_abs']:>11.4e} {r['mean_rel']:>11.4e} "
+                  f"{r['max_rel']:>11.4e}" for r in self.table]
+        lines.append(f"log-log slope of mean_abs vs steps: {self.slope:.3f} (fitted on {self.fit_rows} rows)")
+        lines.append("error concentration: " + ", ".join(f"{k} {v}" for k, v in self.concentration.items()))
+        return "\n".join(lines)
+
+    def to_dict(self) -> dict:
+        return {"technique": self.technique, "mean_rel": self.mean_rel, "max_rel": self.max_rel,
+                "table": self.table, "slope": self.slope, "fit_rows": self.fit_rows,
+                "reference_max_error": self.reference_max_error,
+                "concentration": {k: (v.tolist() if isinstance(v, np.ndarray) else v)
+                                  for k, v in self.concentration.items()}}
+
+    def save(self, out_dir) -> None:
+        """``bias.json`` (the numbers) and ``bias_error.exr`` (per-pixel error at the first step count)."""
+        import json
+
+        from ..io import write_exr, write_text
+        out = Path(out_dir)
+        write_text(out / "bias.json", json.dumps(self.to_dict(), indent=2, default=float))
+        write_exr(out / "bias_error.exr", self.error.astype(np.float32))
 
 
 def edge_mask(values: np.ndarray, rel: float | None = 0.05) -> np.ndarray:
