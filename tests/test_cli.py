@@ -83,3 +83,23 @@ def test_bad_scene_file_names_the_file(tmp_path, capsys):
 def test_console_script_entry_point_runs():
     r = subprocess.run([sys.executable, "-m", "vlref", "--version"], capture_output=True, text=True)
     assert r.returncode == 0 and __version__ in r.stdout
+
+
+def test_reference_writes_reference_and_error_and_reports_the_largest_estimate(tmp_path, capsys):
+    out = tmp_path / "ref"
+    assert main(["reference", "pillars", "-o", str(out), "--set", "render.width=12", "--set", "render.height=8",
+                 "--rel-tol", "1e-3"]) == 0
+    assert "largest error estimate" in capsys.readouterr().out
+    ref = read_image(out / "reference.exr")
+    err = read_image(out / "error.exr")[..., 0]
+    assert ref.shape == (8, 12, 3) and np.isfinite(ref).all()
+    assert (err >= 0).all() and np.isfinite(err).all()
+
+
+def test_bias_reports_error_against_steps(tmp_path, capsys):
+    out = tmp_path / "bias"
+    assert main(["bias", "pillars", "--technique", "physical", "--steps", "4,16", "-o", str(out),
+                 "--set", "render.width=12", "--set", "render.height=8"]) == 0
+    text = capsys.readouterr().out
+    assert "log-log slope" in text and "technique physical" in text
+    assert (out / "bias.json").is_file() and (out / "bias_error.exr").is_file()

@@ -54,7 +54,7 @@ from .errors import InputError
 from .io import srgb8, write_exr
 from .render import Frame, prepare_frame
 
-__all__ = ["auto_exposure", "display_rgb", "display_scalar", "Slider", "Choice", "Toggle", "live_widgets",
+__all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice", "Toggle", "live_widgets",
            "interact_or_static", "Timing", "time_call", "PreviewRenderer", "examples_dir", "EXAMPLE_FILES",
            "make_port_example", "scaled_light_intensity"]
 
@@ -97,6 +97,47 @@ def display_scalar(values: np.ndarray, vmin: float | None = None, vmax: float | 
     out = np.clip((a - lo) / scale, 0.0, 1.0) if scale > 0 else np.zeros_like(a)
     out[~finite] = np.nan
     return out
+
+
+def display_buffer(buffer: np.ndarray, exposure: float | None = None, vmin: float | None = None,
+                   vmax: float | None = None) -> np.ndarray:
+    """A render buffer ready for ``imshow``: ``(H, W, 3)`` -> :func:`display_rgb` (uint8), ``(H, W)`` ->
+    :func:`display_scalar` (float in [0, 1], NaN where not finite)."""
+    a = np.asarray(buffer)
+    if a.ndim == 3 and a.shape[2] == 3:
+        return display_rgb(a, exposure)
+    if a.ndim == 2:
+        return display_scalar(a, vmin, vmax)
+    raise ValueError(f"expected an (H, W) or (H, W, 3) buffer, got shape {a.shape}")
+
+
+def plot_images(images: Mapping[str, np.ndarray], ncols: int = 3, width: float = 4.0, cmap: str = "magma"):
+    """A matplotlib figure with one titled panel per image, ``ncols`` to a row.
+
+    uint8 ``(H, W, 3)`` images are shown as they are; float ``(H, W)`` images in [0, 1] (e.g. from
+    :func:`display_scalar`) through ``cmap`` with NaN in grey. Returns the figure.
+    """
+    import matplotlib.pyplot as plt
+
+    if not images:
+        raise ValueError("no image to plot")
+    n = len(images)
+    cols = min(ncols, n)
+    rows = -(-n // cols)
+    first = next(iter(images.values()))
+    aspect = first.shape[0] / first.shape[1]
+    fig, axes = plt.subplots(rows, cols, figsize=(width * cols, width * aspect * rows + 0.4 * rows), squeeze=False)
+    colours = plt.get_cmap(cmap).with_extremes(bad="0.35")
+    for ax, (title, img) in zip(axes.flat, images.items()):
+        if img.ndim == 2:
+            ax.imshow(img, cmap=colours, vmin=0.0, vmax=1.0, interpolation="nearest")
+        else:
+            ax.imshow(img, interpolation="nearest")
+        ax.set_title(title, fontsize=10)
+    for ax in axes.flat:
+        ax.axis("off")
+    fig.tight_layout()
+    return fig
 
 
 # --------------------------------------------------------------------------- controls

@@ -193,53 +193,51 @@ def _material():
 
 
 @dataclass(frozen=True)
-class Plane:
-    shape: str = F("plane", choices=("plane",))
-    point: Vec3 = F((0.0, 0.0, 0.0), "a point on the plane")
-    normal: Vec3 = F((0.0, 1.0, 0.0), "plane normal", nonzero=True)
+class _SceneObject:
+    """Fields every object shape has."""
+
     material: Material = F(factory=_material, doc="surface material")
     name: str = F("", "optional name")
 
 
 @dataclass(frozen=True)
-class Box:
+class Plane(_SceneObject):
+    shape: str = F("plane", choices=("plane",))
+    point: Vec3 = F((0.0, 0.0, 0.0), "a point on the plane")
+    normal: Vec3 = F((0.0, 1.0, 0.0), "plane normal", nonzero=True)
+
+
+@dataclass(frozen=True)
+class Box(_SceneObject):
     shape: str = F("box", choices=("box",))
     center: Vec3 = F((0.0, 0.0, 0.0), "box centre")
     size: Vec3 = F((1.0, 1.0, 1.0), "edge lengths along the box's own x, y, z", gt=0.0)
     rotation: Vec3 = F((0.0, 0.0, 0.0), "Euler angles in degrees (Unity order z, x, y)")
-    material: Material = F(factory=_material, doc="surface material")
-    name: str = F("", "optional name")
 
 
 @dataclass(frozen=True)
-class Sphere:
+class Sphere(_SceneObject):
     shape: str = F("sphere", choices=("sphere",))
     center: Vec3 = F((0.0, 0.0, 0.0), "sphere centre")
     radius: float = F(1.0, "radius (metres)", gt=0.0)
-    material: Material = F(factory=_material, doc="surface material")
-    name: str = F("", "optional name")
 
 
 @dataclass(frozen=True)
-class Cylinder:
+class Cylinder(_SceneObject):
     shape: str = F("cylinder", choices=("cylinder",))
     center: Vec3 = F((0.0, 0.0, 0.0), "centre of the cylinder (middle of its axis)")
     radius: float = F(0.5, "radius (metres)", gt=0.0)
     height: float = F(2.0, "length along its local y axis (metres)", gt=0.0)
     rotation: Vec3 = F((0.0, 0.0, 0.0), "Euler angles in degrees (Unity order z, x, y)")
-    material: Material = F(factory=_material, doc="surface material")
-    name: str = F("", "optional name")
 
 
 @dataclass(frozen=True)
-class Mesh:
+class Mesh(_SceneObject):
     shape: str = F("mesh", choices=("mesh",))
     path: str = F("", "Wavefront OBJ file, relative to the scene file (required)", file=True)
     position: Vec3 = F((0.0, 0.0, 0.0), "translation")
     rotation: Vec3 = F((0.0, 0.0, 0.0), "Euler angles in degrees (Unity order z, x, y)")
     scale: Vec3 = F((1.0, 1.0, 1.0), "per-axis scale", gt=0.0)
-    material: Material = F(factory=_material, doc="surface material")
-    name: str = F("", "optional name")
 
     def check(self):
         return ("path", "missing required key") if not self.path else None
@@ -256,7 +254,7 @@ class Scene:
     camera: CameraSettings = F(factory=CameraSettings, doc="camera")
     medium: Medium = F(factory=Medium, doc="participating medium")
     lights: tuple[Light, ...] = F(factory=tuple, doc="lights ([[lights]] tables)")
-    objects: tuple[Plane, ...] = F(factory=tuple, doc="objects ([[objects]] tables, tagged by shape)",
+    objects: tuple[SceneObject, ...] = F(factory=tuple, doc="objects ([[objects]] tables, tagged by shape)",
                                    union=("shape", SHAPES))
     techniques: TechniqueParams = F(factory=TechniqueParams, doc="per-technique parameters")
     source: str = F("", internal=True)

@@ -66,6 +66,9 @@ class SlightlyMadParams:
 
     steps: int = F(8, "SampleCount", min=1, max=64)
     resolution: str = F("half", "VolumetricLightRenderer.Resolution", choices=("full", "half", "quarter"))
+    medium: str = F("source", "where scattering, extinction, MieG, height fog and noise come from: source = the "
+                    "VL parameters below (VL's defaults); scene = the scene's [medium] (sigma_t = sigma_s + sigma_a)",
+                    choices=("source", "scene"))
     scattering: float = F(0.5, "ScatteringCoef (1/m)", min=0.0)
     extinction: float = F(0.01, "ExtinctionCoef (1/m)", min=0.0)
     skybox_extinction: float = F(0.9, "SkyboxExtinctionCoef (directional alpha on sky pixels)", min=0.0, max=1.0)

@@ -53,14 +53,26 @@ def srgb_to_linear(c) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
+def vl_coefficients(scene, p) -> tuple[float, float, float]:
+    """``(σs, σt, g)`` of the march: VL's parameters, or the scene's ``[medium]`` when ``medium = "scene"``."""
+    if p.medium == "scene":
+        m = scene.medium
+        return m.scattering, m.extinction, m.anisotropy
+    return p.scattering, p.extinction, p.mie_g
+
+
 def vl_medium(scene, p):
     """The VL density as a :class:`~vlref.scene.model.Medium` for :func:`vlref.medium.pack_medium`.
+
+    With ``medium = "scene"`` it is the scene's own medium.
 
     Height fog ``exp(-(y + GroundLevel) HeightScale)`` = base ``-GroundLevel``, falloff ``HeightScale``.
     Noise sampled at ``frac(s x + t s v)`` in texture space = lattice scale ``n s`` cells per metre
     (``n`` = 128 for ``NoiseVolume.bytes``, 32 for ours) and velocity ``-v`` (vlref's field moves by
     ``+v t``, VL's by ``-v t``).
     """
+    if p.medium == "scene":
+        return scene.medium
     fog = HeightFog(base=-p.ground_level, falloff=p.height_scale) if p.height_fog else None
     noise = None
     if p.noise:
@@ -247,6 +259,7 @@ def render(scene, frame) -> dict:
     lut, cookie = _lut(scene, p), _cookie(scene, p)
     camp = np.asarray(cam.position, dtype=np.float64)
     sm = frame.shadow_maps("hard")
+    sigma_s, sigma_t, mie_g = vl_coefficients(scene, p)
 
     out = {"depth_march": eye_lo, "dither": beta}
     volume = np.zeros((h, w, 4))
@@ -260,8 +273,8 @@ def render(scene, frame) -> dict:
         cone = CONE_COOKIE_ONLY if p.spot_cone == "cookie" else CONE_CODES[light.cone]
         kind = {"point": 0, "spot": 1, "directional": 2}[light.type]
         rgb, tau = vl_march(camp, dirs, t0, length, covered, beta, n_steps, kind, lf, att, cone,
-                            lut if p.attenuation == "unity_lut" else packed.lut, cookie, p.scattering,
-                            p.extinction, p.mie_g, p.right_endpoint, p.initial_half_tau, med.params, med.noise,
+                            lut if p.attenuation == "unity_lut" else packed.lut, cookie, sigma_s,
+                            sigma_t, mie_g, p.right_endpoint, p.initial_half_tau, med.params, med.noise,
                             sm.ints, sm.floats, sm.data, sm.tint, frame.geometry.arrays, packed.floats, i,
                             p.cube_shadow_factor)
         out[f"light{i}"] = rgb
@@ -273,7 +286,7 @@ def render(scene, frame) -> dict:
             volume[..., 3] = fp16(alpha) if p.fp16 else alpha
     if not p.point_spot_alpha_zero and any(l.type != "directional" for l in scene.lights):
         view = np.exp(-vl_view_tau(camp, dirs, np.minimum(t_surf, p.max_ray_length), beta, n_steps,
-                                   p.extinction, med.params, med.noise))
+                                   sigma_t, med.params, med.noise))
         if not any(l.type == "directional" for l in scene.lights):
             volume[..., 3] = fp16(view) if p.fp16 else view
     out["march"] = volume.copy()

@@ -1,0 +1,95 @@
+"""`vlref bench --quick --json`: every section present, every figure finite and the timings/rates positive,
+the NumPy baseline equal to the march kernel, and the primitive BVH equal to a linear scan. No timing asserts."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from vlref.bench import SECTIONS, main_bench
+from vlref.geometry import build_geometry, closest_hit, shadow_transmittance
+from vlref.scene.model import Box, Cylinder, Light, Material, Plane, Scene, Sphere
+
+POSITIVE_SUFFIXES = ("seconds", "_s", "per_s", "per_s_per_thread", "bytes", "samples", "texels", "speedup")
+
+
+def numbers(node, path=""):
+    """Every (path, number) in a JSON tree (booleans excluded)."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from numbers(v, f"{path}.{k}")
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            yield from numbers(v, f"{path}[{i}]")
+    elif isinstance(node, (int, float)) and not isinstance(node, bool):
+        yield path, node
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("bench") / "bench.json"
+    assert main_bench(["--quick", "--json", "-o", str(out)]) == 0
+    return json.loads(out.read_text())
+
+
+def test_every_section_with_finite_positive_figures(report):
+    assert set(SECTIONS) <= set(report)
+    for path, value in numbers(report):
+        assert math.isfinite(value), path
+        if path.rsplit(".", 1)[-1].endswith(POSITIVE_SUFFIXES):
+            assert value > 0, path
+    assert {"one_spot", "four_lights"} <= set(report["march"])
+    assert report["march"]["four_lights"]["samples"] > report["march"]["one_spot"]["samples"] > 0
+    assert "1" in report["scaling"]["threads"]
+    assert report["first_render"]["warm"]["render_s"] > 0
+    assert report["memory"]["subprocess_maxrss_bytes"] > report["memory"]["tracemalloc_peak_bytes"] > 0
+    assert len(report["targets"]) == 7 and all(isinstance(t["met"], bool) for t in report["targets"])
+
+
+def test_numpy_baseline_is_the_same_computation(report):
+    assert report["baseline"]["samples"] > 0
+    assert report["baseline"]["max_abs_diff_relative_to_peak"] < 1e-9
+
+
+MATS = (Material(), Material(opacity=0.5, tint=(1.0, 0.6, 0.3)))
+
+
+def random_scene(rng):
+    objects = [Plane(point=(0.0, -2.0, 0.0), normal=tuple(rng.normal(size=3) * 0.2 + (0, 1, 0)))]
+    for _ in range(int(rng.integers(1, 25))):
+        c = tuple(rng.uniform(-4, 4, 3))
+        m = MATS[int(rng.random() < 0.25)]
+        kind = rng.integers(0, 3)
+        if kind == 0:
+            objects.append(Sphere(center=c, radius=float(rng.uniform(0.1, 1.5)), material=m))
+        elif kind == 1:
+            objects.append(Box(center=c, size=tuple(rng.uniform(0.1, 2.0, 3)), rotation=tuple(rng.uniform(0, 90, 3)),
+                               material=m))
+        else:
+            objects.append(Cylinder(center=c, radius=float(rng.uniform(0.1, 1.0)), height=float(rng.uniform(0.2, 3)),
+                                    rotation=tuple(rng.uniform(0, 90, 3)), material=m))
+    # exact duplicates: equal t from different objects, the lower index must win
+    objects.append(objects[1])
+    return Scene(lights=(Light(type="point"),), objects=tuple(objects))
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_primitive_bvh_equals_linear_scan(seed):
+    """closest_hit / shadow_transmittance through the primitive BVH give the bits of a linear scan."""
+    rng = np.random.default_rng(seed)
+    geometry = build_geometry(random_scene(rng))
+    geo = geometry.arrays
+    n = geo.prim_kind.shape[0]
+    linear = geo._replace(lin_prims=np.arange(n, dtype=np.int64), pnode_min=np.zeros((0, 3)),
+                          pnode_max=np.zeros((0, 3)), pnode_first=np.zeros(0, np.int32),
+                          pnode_count=np.zeros(0, np.int32), pnode_prims=np.zeros(0, np.int64))
+    assert geo.pnode_prims.shape[0] + geo.lin_prims.shape[0] == n
+    for _ in range(300):
+        o = rng.uniform(-7, 7, 3)
+        d = rng.uniform(-4, 4, 3) - o
+        d[rng.integers(0, 3)] *= rng.integers(0, 2)  # some exact zero components
+        for opaque_only in (True, False):
+            assert closest_hit(geo, *o, *d, 0.0, math.inf, opaque_only) == \
+                closest_hit(linear, *o, *d, 0.0, math.inf, opaque_only)
+        assert shadow_transmittance(geo, *o, *d, 1.0) == shadow_transmittance(linear, *o, *d, 1.0)
