@@ -10,9 +10,9 @@ import pytest
 
 from vlref.errors import InputError
 from vlref.io import read_image, srgb8
-from vlref.notebook import (EXAMPLE_FILES, Choice, PreviewRenderer, Slider, Toggle, auto_exposure, display_rgb,
-                            display_scalar, examples_dir, interact_or_static, live_widgets, make_port_example,
-                            scaled_light_intensity, time_call)
+from vlref.notebook import (EXAMPLE_FILES, Choice, PreviewRenderer, Slider, Toggle, auto_exposure,
+                            display_buffer, display_rgb, display_scalar, examples_dir, interact_or_static,
+                            live_widgets, make_port_example, plot_images, scaled_light_intensity, time_call)
 from vlref.oracle import compare_files
 from vlref.render import render
 from vlref.scene import load_scene
@@ -59,6 +59,36 @@ def test_display_scalar_normalises_and_marks_non_finite():
     assert np.all(np.isnan(display_scalar(np.full((2, 2), np.inf))))
 
 
+def test_display_buffer_dispatches_on_shape():
+    rgb = np.full((4, 5, 3), 0.5)
+    np.testing.assert_array_equal(display_buffer(rgb, exposure=2.0), srgb8(rgb, 2.0))
+    depth = np.array([[1.0, np.inf], [3.0, 5.0]])
+    np.testing.assert_array_equal(display_buffer(depth, vmin=1.0, vmax=5.0), display_scalar(depth, 1.0, 5.0))
+    with pytest.raises(ValueError):
+        display_buffer(np.zeros((2, 2, 4)))
+
+
+def test_plot_images_one_panel_per_image():
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    rgb = display_rgb(np.random.default_rng(3).uniform(0, 1, (6, 8, 3)))
+    scalar = display_scalar(np.array([[0.0, 1.0], [np.inf, 0.5]]))
+    fig = plot_images({"a": rgb, "b": scalar, "c": rgb}, ncols=2)
+    try:
+        titled = [ax for ax in fig.axes if ax.get_title()]
+        assert [ax.get_title() for ax in titled] == ["a", "b", "c"]
+        assert len(fig.axes) == 4  # 2 x 2 grid, the last panel empty
+        np.testing.assert_array_equal(titled[0].images[0].get_array(), rgb)
+        shown = titled[1].images[0].get_array()
+        assert np.ma.is_masked(shown) and shown.mask[1, 0]
+    finally:
+        plt.close(fig)
+    with pytest.raises(ValueError):
+        plot_images({})
+
+
 # --------------------------------------------------------------------------- controls and timing
 
 def test_static_interact_calls_once_with_control_values():
@@ -95,9 +125,9 @@ def test_live_interact_builds_widgets_and_runs_the_function():
     assert isinstance(ui, w.interactive)
     kinds = {c.description: type(c) for c in ui.children[:-1]}
     assert kinds == {"steps": w.IntSlider, "g": w.FloatSlider, "mode": w.Dropdown, "blur": w.Checkbox}
-    assert calls[-1] == (16, pytest.approx(0.3), "half", False)
+    assert calls == [(16, pytest.approx(0.3), "half", False)]
     ui.children[0].value = 32
-    assert calls[-1][0] == 32
+    assert len(calls) == 2 and calls[-1][0] == 32
     log = interact_or_static(lambda s: None, {"s": Slider(0.01, 10.0, 1.0, log=True)}, live=True)
     assert isinstance(log.children[0], w.FloatLogSlider) and log.children[0].value == pytest.approx(1.0)
 

@@ -36,7 +36,8 @@ from .errors import InputError
 from .numeric import cast
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "sigma",
-           "noise_value", "clip_to_bounds", "optical_depth", "FOG_MAX_EXPONENT"]
+           "noise_value", "clip_to_bounds", "optical_depth", "fog_exponent", "fog_depth_ratio", "in_bounds",
+           "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
@@ -100,7 +101,7 @@ def pack_medium(scene, dtype=np.float64) -> PackedMedium:
     return PackedMedium(p.astype(dtype), np.ascontiguousarray(lattice, dtype=dtype))
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def noise_value(lattice, px, py, pz):
     """Trilinear, periodic sample of ``lattice`` at ``p`` (lattice cells; values at cell centres)."""
     n = lattice.shape[0]
@@ -118,23 +119,40 @@ def noise_value(lattice, px, py, pz):
     return (c00 * (one - wy) + c10 * wy) * (one - wz) + (c01 * (one - wy) + c11 * wy) * wz
 
 
-@njit(cache=True, fastmath=False)
-def _fog_exponent(mp, y):
+@njit(cache=True, fastmath=False, inline="always")
+def fog_exponent(mp, y):
+    """The height-fog exponent ``min(-(y - base) · falloff, FOG_MAX_EXPONENT)`` (fog factor = its exp)."""
     return min(-(y - mp[M_FOG_BASE]) * mp[M_FOG_K], cast(y, FOG_MAX_EXPONENT))
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
+def in_bounds(mp, x, y, z):
+    """The point lies in the medium's box (always, for an unbounded medium)."""
+    if mp[M_BOUNDED] == cast(x, 0.0):
+        return True
+    return not (x < mp[M_BX0] or x > mp[M_BX1] or y < mp[M_BY0] or y > mp[M_BY1] or z < mp[M_BZ0]
+                or z > mp[M_BZ1])
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def fog_depth_ratio(delta):
+    """``(1 - e^{-δ})/δ`` for ``δ = |e_a - e_b| >= 0`` (``1 - δ/2`` below 1e-6): the height-fog optical
+    depth of a segment is ``σt · L · e^{max(e_a, e_b)}`` times this."""
+    if delta < cast(delta, 1e-6):
+        return cast(delta, 1.0) - cast(delta, 0.5) * delta
+    return -math.expm1(-delta) / delta
+
+
+@njit(cache=True, fastmath=False, inline="always")
 def density(mp, lattice, x, y, z):
     """Density factor ρ(x) ≥ 0 (module docstring)."""
     zero = cast(x, 0.0)
     one = cast(x, 1.0)
-    if mp[M_BOUNDED] != zero:
-        if (x < mp[M_BX0] or x > mp[M_BX1] or y < mp[M_BY0] or y > mp[M_BY1] or z < mp[M_BZ0]
-                or z > mp[M_BZ1]):
-            return zero
+    if not in_bounds(mp, x, y, z):
+        return zero
     rho = one
     if mp[M_FOG] != zero:
-        rho = math.exp(_fog_exponent(mp, y))
+        rho = math.exp(fog_exponent(mp, y))
     if mp[M_NOISE] != zero:
         s = mp[M_NSCALE]
         n = noise_value(lattice, s * (x - mp[M_NSX]), s * (y - mp[M_NSY]), s * (z - mp[M_NSZ]))
@@ -149,7 +167,7 @@ def sigma(mp, lattice, x, y, z):
     return mp[M_SS] * rho, mp[M_ST] * rho
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     """``[t0, t1]`` clipped to the medium box (slab test); empty when the result has ``a >= b``."""
     if mp[M_BOUNDED] == cast(ox, 0.0):
@@ -172,7 +190,7 @@ def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     return a, b
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
     """τ = ∫_{t0}^{t1} σt(o + t d) dt for a unit direction ``d`` (module docstring); 0 for ``t1 <= t0``."""
     zero = cast(ox, 0.0)
@@ -189,8 +207,6 @@ def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
         return mp[M_ST] * acc * h
     if mp[M_FOG] == zero:
         return mp[M_ST] * length
-    ea = _fog_exponent(mp, oy + a * dy)
-    eb = _fog_exponent(mp, oy + b * dy)
-    delta = abs(ea - eb)
-    ratio = cast(ox, 1.0) - cast(ox, 0.5) * delta if delta < cast(ox, 1e-6) else -math.expm1(-delta) / delta
-    return mp[M_ST] * length * math.exp(max(ea, eb)) * ratio
+    ea = fog_exponent(mp, oy + a * dy)
+    eb = fog_exponent(mp, oy + b * dy)
+    return mp[M_ST] * length * math.exp(max(ea, eb)) * fog_depth_ratio(abs(ea - eb))

@@ -6,7 +6,8 @@ Display
     (:func:`vlref.io.srgb8`: exposure, ACES filmic fit, sRGB OETF); :func:`auto_exposure` picks the
     exposure that maps the 99th percentile of the brightest channel to 1. :func:`display_scalar`
     normalises a one-channel buffer (depth, shadow-map distances) to [0, 1] with non-finite values
-    (sky, empty texels) as NaN, which matplotlib draws in its "bad" colour.
+    (sky, empty texels) as NaN, which matplotlib draws in its "bad" colour. :func:`display_buffer`
+    picks one of the two by shape; :func:`plot_images` lays titled panels out in a matplotlib figure.
 
 Controls
     :class:`Slider`, :class:`Choice` and :class:`Toggle` describe a control without importing
@@ -54,9 +55,9 @@ from .errors import InputError
 from .io import srgb8, write_exr
 from .render import Frame, prepare_frame
 
-__all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice", "Toggle", "live_widgets",
-           "interact_or_static", "Timing", "time_call", "PreviewRenderer", "examples_dir", "EXAMPLE_FILES",
-           "make_port_example", "scaled_light_intensity"]
+__all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice",
+           "Toggle", "live_widgets", "interact_or_static", "Timing", "time_call", "PreviewRenderer", "examples_dir",
+           "EXAMPLE_FILES", "make_port_example", "scaled_light_intensity"]
 
 
 # --------------------------------------------------------------------------- display arrays
@@ -221,8 +222,8 @@ def interact_or_static(fn: Callable[..., Any], controls: Mapping[str, Control], 
     """Bind ``fn(**values)`` to ``controls``.
 
     Live (``live`` None -> :func:`live_widgets`): displays a grid of widgets above an output area and
-    re-runs ``fn`` on every change (sliders fire on release unless ``continuous``); returns the
-    ``ipywidgets.interactive`` object. Static: returns ``fn(**{name: control.value})``.
+    runs ``fn`` once now and again on every change (sliders fire on release unless ``continuous``);
+    returns the ``ipywidgets.interactive`` object. Static: returns ``fn(**{name: control.value})``.
     """
     if not (live_widgets() if live is None else live):
         return fn(**{name: c.value for name, c in controls.items()})
@@ -233,7 +234,6 @@ def interact_or_static(fn: Callable[..., Any], controls: Mapping[str, Control], 
     ui = w.interactive(fn, **widgets)
     grid = w.GridBox(list(widgets.values()), layout=w.Layout(grid_template_columns=f"repeat({columns}, 1fr)"))
     display(w.VBox([grid, ui.children[-1]]))
-    ui.update()
     return ui
 
 
@@ -311,7 +311,7 @@ class PreviewRenderer:
             lights = pack_lights(scene)
             colour = scene_colour(old.gbuffer, scene, old.geometry, lights)
             self._frame = Frame(scene, old.camera, old.geometry, old.gbuffer, lights, colour,
-                                old._shadow_maps if keep_maps else {})
+                                old.shadow_cache if keep_maps else {})
             self.rebuilds["shading"] += 1
             self.rebuilds["shadow_maps"] += 0 if keep_maps else 1
         else:

@@ -77,7 +77,12 @@ def scene_hash(scene: Scene) -> str:
 
 @dataclass
 class Frame:
-    """Everything the volumetric passes of one frame read, built once per render."""
+    """Everything the volumetric passes of one frame read, built once per render.
+
+    ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
+    :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
+    (:func:`vlref.oracle.port_buffers.port_frame`).
+    """
 
     scene: Scene
     camera: Camera
@@ -85,7 +90,7 @@ class Frame:
     gbuffer: Any
     lights: Any
     scene_colour: np.ndarray
-    _shadow_maps: dict = field(default_factory=dict, repr=False)
+    shadow_cache: dict = field(default_factory=dict, repr=False)
 
     def shadow_maps(self, shadow_filter: str | None = None):
         """The lights' shadow maps, built on first use (cascades depend on the camera).
@@ -93,7 +98,7 @@ class Frame:
         ``shadow_filter`` replaces every shadowed light's lookup filter (``hard``, ``pcf``, ``exact``):
         techniques fix the filter their source uses (Vos and VolumetricLights: one point sample).
         """
-        if shadow_filter not in self._shadow_maps:
+        if shadow_filter not in self.shadow_cache:
             from .lights.shadowmaps import build_shadow_maps
             scene = self.scene
             if shadow_filter is not None:
@@ -102,8 +107,8 @@ class Frame:
                 if lights == scene.lights:
                     return self.shadow_maps()
                 scene = scene.replace(lights=lights)
-            self._shadow_maps[shadow_filter] = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
-        return self._shadow_maps[shadow_filter]
+            self.shadow_cache[shadow_filter] = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
+        return self.shadow_cache[shadow_filter]
 
 
 @dataclass
@@ -154,7 +159,7 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
                "object_id": g.object_id}
     if stages:
         buffers.update({k: v for k, v in out.items() if k not in buffers})
-        for maps in frame._shadow_maps.values():
+        for maps in frame.shadow_cache.values():
             buffers.update(maps.buffers())
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),

@@ -225,7 +225,7 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     return ShadowMaps(ints, floats, data, tint, names)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def _tap(data, tint, base, tbase, res, col, row, d_ref):
     k = row * res + col
     lit = 1.0 if d_ref <= data[base + k] else 0.0
@@ -234,9 +234,10 @@ def _tap(data, tint, base, tbase, res, col, row, d_ref):
     return lit, lit, lit
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
-    """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top)."""
+    """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top). Without a transparent layer
+    (``tbase < 0``) r = g = b and the PCF blend is evaluated once."""
     if not pcf:
         col = min(max(int(math.floor(u * res)), 0), res - 1)
         row = min(max(int(math.floor(v * res)), 0), res - 1)
@@ -247,16 +248,22 @@ def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
     c0, r0 = int(fu), int(fv)
     c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
     r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
+    w00, w10, w01, w11 = (1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv
+    if tbase < 0:
+        top, bottom = base + r0c * res, base + r1c * res
+        lit = (w00 * (1.0 if d_ref <= data[top + c0c] else 0.0) + w10 * (1.0 if d_ref <= data[top + c1c] else 0.0)
+               + w01 * (1.0 if d_ref <= data[bottom + c0c] else 0.0)
+               + w11 * (1.0 if d_ref <= data[bottom + c1c] else 0.0))
+        return lit, lit, lit
     a = _tap(data, tint, base, tbase, res, c0c, r0c, d_ref)
     b = _tap(data, tint, base, tbase, res, c1c, r0c, d_ref)
     c = _tap(data, tint, base, tbase, res, c0c, r1c, d_ref)
     d = _tap(data, tint, base, tbase, res, c1c, r1c, d_ref)
-    w00, w10, w01, w11 = (1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv
     return (w00 * a[0] + w10 * b[0] + w01 * c[0] + w11 * d[0], w00 * a[1] + w10 * b[1] + w01 * c[1] + w11 * d[1],
             w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def _cube_face(wx, wy, wz):
     ax, ay, az = abs(wx), abs(wy), abs(wz)
     if ax >= ay and ax >= az:
@@ -266,7 +273,7 @@ def _cube_face(wx, wy, wz):
     return 4 if wz >= 0 else 5
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
     """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64)."""
     res = sm_i[light, S_RES]
@@ -312,24 +319,31 @@ def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
 
 
 @njit(cache=True, fastmath=False)
+def exact_visibility(geo, kind, lf, light, x, y, z):
+    """Unfiltered-strength RGB transmittance of a shadow ray from world point ``x`` toward light ``light``
+    (to infinity for directional lights; 1 at the light's own position)."""
+    if kind == 2:
+        return shadow_transmittance(geo, x, y, z, -float(lf[light, F_DX]), -float(lf[light, F_DY]),
+                                    -float(lf[light, F_DZ]), np.inf)
+    wx, wy, wz = float(lf[light, F_PX]) - x, float(lf[light, F_PY]) - y, float(lf[light, F_PZ]) - z
+    dist = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if dist == 0.0:
+        return 1.0, 1.0, 1.0
+    return shadow_transmittance(geo, x, y, z, wx / dist, wy / dist, wz / dist, dist)
+
+
+@njit(cache=True, fastmath=False)
 def shadow_visibility(sm_i, sm_f, data, tint, geo, kind, lf, light, x, y, z):
     """Visibility (r, g, b) in [0, 1] of light ``light`` from world point ``x`` (float64), strength applied.
 
-    Mode ``SHADOW_EXACT`` traces a shadow ray toward the light (to infinity for directional lights).
+    Mode ``SHADOW_EXACT`` traces a shadow ray toward the light (:func:`exact_visibility`); the map modes
+    are :func:`map_lit`.
     """
     mode = sm_i[light, S_MODE]
     if mode == SHADOW_NONE:
         return 1.0, 1.0, 1.0
     if mode == SHADOW_EXACT:
-        if kind == 2:
-            r, g, b = shadow_transmittance(geo, x, y, z, -float(lf[light, F_DX]), -float(lf[light, F_DY]),
-                                           -float(lf[light, F_DZ]), np.inf)
-        else:
-            wx, wy, wz = float(lf[light, F_PX]) - x, float(lf[light, F_PY]) - y, float(lf[light, F_PZ]) - z
-            dist = math.sqrt(wx * wx + wy * wy + wz * wz)
-            if dist == 0.0:
-                return 1.0, 1.0, 1.0
-            r, g, b = shadow_transmittance(geo, x, y, z, wx / dist, wy / dist, wz / dist, dist)
+        r, g, b = exact_visibility(geo, kind, lf, light, x, y, z)
     else:
         r, g, b = map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z)
     s = sm_f[light, S_STRENGTH]

@@ -33,6 +33,16 @@ march is float32 (constants through :func:`vlref.numeric.cast`, the HG value inc
 texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
 its own) and exact shadow rays (the geometry is float64).
 
+Evaluation (issue 8; the same integral, rearranged for speed): per segment ``e^{-σt Δ}`` is taken as
+``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs (one transcendental, not two) and
+reused while ``σt`` does not change (homogeneous or boxed media: once per segment). In a noiseless
+height fog the fog exponent is linear in the step index, so the factor is ``e^{e_0} q^i`` (one multiply
+per step) unless a sample reaches ``FOG_MAX_EXPONENT``; the leg of a point/spot light in an unbounded
+noiseless fog is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor reused
+for the larger end. These change results by rounding only: at most a few ulp per step (measured
+≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against the per-step ``exp`` form). Shadow-map
+lookups are inlined (:func:`vlref.lights.shadowmaps.map_lit`); exact shadow rays stay out of line.
+
 Determinism: ``prange`` over pixels only, no cross-pixel reduction: the same bits for any thread count.
 """
 
@@ -45,8 +55,9 @@ from numba import njit, prange
 from ..numeric import cast
 from ..lights.pack import (F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND)
 from ..lights.shading import light_incidence
-from ..lights.shadowmaps import SHADOW_NONE, S_MODE, shadow_visibility
-from ..medium import M_BOUNDED, M_G, M_SS, M_ST, density, optical_depth
+from ..lights.shadowmaps import SHADOW_EXACT, SHADOW_NONE, S_MODE, S_STRENGTH, exact_visibility, map_lit
+from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_FOG, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, density,
+                      fog_depth_ratio, fog_exponent, in_bounds, optical_depth)
 from ..phase import hg
 from .segments import cone_segment, sphere_segment
 
@@ -73,38 +84,73 @@ def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, coo
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero = cast(ox, 0.0)
     one = cast(ox, 1.0)
+    lr, lg, lb = zero, zero, zero
+    ss0, st0, g = mp[M_SS], mp[M_ST], mp[M_G]
+    if ss0 == zero:  # nothing scatters
+        return lr, lg, lb
     kind = li[k, I_KIND]
-    shadowed = sm_i[k, S_MODE] != SHADOW_NONE
-    leg_to_inf = kind == 2 and mp[M_BOUNDED] == zero
-    g = mp[M_G]
-    ss0, st0 = mp[M_SS], mp[M_ST]
+    mode = sm_i[k, S_MODE]
+    strength = sm_f[k, S_STRENGTH]
+    fog, noise = mp[M_FOG] != zero, mp[M_NOISE] != zero
+    leg = light_extinction and st0 != zero and not (kind == 2 and mp[M_BOUNDED] == zero)
+    # leg of a point/spot light in an unbounded noiseless fog: the closed form of optical_depth with the
+    # sample's own fog factor e^{e_a} reused when it is the larger end (same operations, same bits)
+    leg_fog = leg and fog and not noise and mp[M_BOUNDED] == zero and kind != 2
     trans = math.exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
     delta = (b - a) / cast(ox, steps)
-    lr, lg, lb = zero, zero, zero
+    st_prev, em1 = zero, zero  # em1 = expm1(-st_prev * delta), reused while st is unchanged
+    # the fog exponent is linear in the step index: e^{e_i} = e^{e_0} q^i while every sample's exponent
+    # lies in (-cap, cap) (no cap reached, no underflow of the running product)
+    e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
+    e_last = fog_exponent(mp, oy + (a + (cast(ox, steps - 1) + beta) * delta) * dy)
+    cap = cast(ox, FOG_MAX_EXPONENT)
+    geometric = fog and not noise and max(e_first, e_last) < cap and min(e_first, e_last) > -cap
+    fog_i = math.exp(e_first) if geometric else one
+    fog_q = math.exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
     for i in range(steps):
         t = a + (cast(ox, i) + beta) * delta
         x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-        rho = density(mp, lattice, x, y, z)
+        ea = fog_exponent(mp, y) if fog else zero
+        if noise:
+            rho = density(mp, lattice, x, y, z)
+        elif not in_bounds(mp, x, y, z):
+            rho = zero
+        elif geometric:
+            rho = fog_i
+        else:
+            rho = math.exp(ea) if fog else one
+        fog_i *= fog_q
         st = st0 * rho
         ss = ss0 * rho
+        if st != st_prev:
+            em1 = math.expm1(-st * delta)
+            st_prev = st
         if ss > zero:
             lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
             if er + eg + eb > zero:
                 vr, vg, vb = one, one, one
-                if shadowed:
-                    fr, fg, fb = shadow_visibility(sm_i, sm_f, sm_data, sm_tint, geo, kind, lf, k, float(x),
-                                                   float(y), float(z))
-                    vr, vg, vb = cast(ox, fr), cast(ox, fg), cast(ox, fb)
-                leg = one
-                if light_extinction and not leg_to_inf:
-                    leg = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, dist, leg_steps))
+                if mode == SHADOW_EXACT:
+                    fr, fg, fb = exact_visibility(geo, kind, lf, k, float(x), float(y), float(z))
+                elif mode != SHADOW_NONE:
+                    fr, fg, fb = map_lit(sm_i, sm_f, sm_data, sm_tint, kind, lf, k, float(x), float(y), float(z))
+                if mode != SHADOW_NONE:
+                    vr = cast(ox, 1.0 - strength * (1.0 - fr))
+                    vg = cast(ox, 1.0 - strength * (1.0 - fg))
+                    vb = cast(ox, 1.0 - strength * (1.0 - fb))
+                tl = one
+                if leg_fog:
+                    el = fog_exponent(mp, y + dist * ly)
+                    top = rho if ea >= el else math.exp(el)
+                    tl = math.exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
+                elif leg:
+                    tl = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, dist, leg_steps))
                 phase = cast(ox, hg(dx * lx + dy * ly + dz * lz, g))
-                s_int = delta if st == zero else -math.expm1(-st * delta) / st
-                f = trans * ss * phase * leg * s_int
+                s_int = delta if st == zero else -em1 / st
+                f = trans * ss * phase * tl * s_int
                 lr += f * er * vr
                 lg += f * eg * vg
                 lb += f * eb * vb
-        trans *= math.exp(-st * delta)
+        trans *= one + em1
     return lr, lg, lb
 
 

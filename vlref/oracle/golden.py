@@ -205,6 +205,7 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
     import numba
 
     from ..io import output_dir, write_exr, write_text
+    from ..render import scene_hash, scene_settings_json
 
     suite = load_suite(suite_path)
     golden_dir = Path(golden_dir)
@@ -218,7 +219,6 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
         for entry in selected:
             start = time.perf_counter()
             buffers, scene = render_entry(entry, suite.buffers)
-            from ..render import scene_hash, scene_settings_json
             record = {"name": entry.name, "scene": entry.scene, "technique": entry.technique,
                       "overrides": list(entry.overrides), "scene_hash": scene_hash(scene),
                       "settings": json.loads(scene_settings_json(scene)), "preset": suite.preset, "files": {}}
@@ -255,6 +255,22 @@ class Outcome:
     margins: dict
 
 
+def _changed_keys(old, new, prefix: str = "") -> list[str]:
+    """Dotted keys whose values differ between two settings trees (``+key`` added, ``-key`` removed)."""
+    if isinstance(old, dict) and isinstance(new, dict):
+        out = []
+        for k in sorted(set(old) | set(new)):
+            key = f"{prefix}.{k}" if prefix else str(k)
+            if k not in old:
+                out.append(f"+{key}")
+            elif k not in new:
+                out.append(f"-{key}")
+            else:
+                out += _changed_keys(old[k], new[k], key)
+        return out
+    return [] if old == new else [prefix or "<settings>"]
+
+
 def _check_files(golden_dir: Path, record: dict) -> list[str]:
     problems = []
     for buf, f in record["files"].items():
@@ -271,7 +287,7 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
            preset: str | None = None, log=print) -> list[Outcome]:
     """Check checksums, staleness and re-renders of the goldens (module docstring); one outcome per entry."""
     from ..io import read_image
-    from ..render import scene_hash
+    from ..render import scene_hash, scene_settings_json
     from .compare import compare_arrays
 
     golden_dir = Path(golden_dir)
@@ -283,11 +299,13 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
                                             f"{manifest.get('suite')} vs {suite_path} {suite.as_dict()}"], {}))
     expected = {e.name: e for e in _select(suite_entries(suite), only)}
     recorded = {e["name"]: e for e in manifest["entries"]}
-    for name in expected.keys() - recorded.keys():
+    for name in sorted(expected.keys() - recorded.keys()):
         outcomes.append(Outcome(name, ["in the suite but not in the manifest (rebuild)"], {}))
     if not only:
-        for name in recorded.keys() - expected.keys():
+        for name in sorted(recorded.keys() - expected.keys()):
             outcomes.append(Outcome(name, ["in the manifest but no longer in the suite (rebuild)"], {}))
+    for o in outcomes:
+        log(f"FAILED {o.name}: {o.problems[0]}")
     for name in sorted(expected.keys() & recorded.keys()):
         record, entry = recorded[name], expected[name]
         start = time.perf_counter()
@@ -298,7 +316,9 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
         if not problems:
             buffers, scene = render_entry(entry, list(record["files"]))
             if scene_hash(scene) != record.get("scene_hash"):
-                problems.append("the scene changed since the build (scene_hash differs); rebuild deliberately")
+                keys = _changed_keys(record.get("settings"), json.loads(scene_settings_json(scene)))
+                problems.append(f"the scene changed since the build (scene_hash differs: {', '.join(keys[:5])}"
+                                f"{' ...' if len(keys) > 5 else ''}); rebuild deliberately")
             tol = preset or record.get("preset", suite.preset)
             for buf, array in buffers.items():
                 ref = read_image(golden_dir / record["files"][buf]["path"])

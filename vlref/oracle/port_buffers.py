@@ -60,7 +60,6 @@ Decoding (float64):
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import importlib
 import math
 import sys
@@ -75,7 +74,8 @@ from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings, raw_to_lin
 from ..errors import InputError
 
 __all__ = ["PortTile", "PortShadowMap", "PortBuffers", "load_port", "decode_depth", "camera_from_matrices",
-           "shadow_maps_from_port", "port_frame", "march_port", "main_march", "FAR_VALUE", "NEAR_VALUE"]
+           "shadow_maps_from_port", "port_frame", "march_port", "main_march", "export_port", "orthographic",
+           "FAR_VALUE", "NEAR_VALUE"]
 
 NEAR_VALUE = {"d3d": 0.0, "gl": -1.0, "reversed": 1.0}
 """Device depth (NDC z) of the near plane per convention."""
@@ -180,7 +180,8 @@ def _texel_ndc(res: int):
 
 def _ray_points(tile: PortTile, res: int):
     """View-space texel-centre rays of a tile: origins (n, 3) on the plane z = 0 (orthographic) or at the
-    eye (perspective), and unit directions (n, 3)."""
+    eye (perspective), and unit directions (n, 3) pointing into the map's volume (whose points at NDC
+    z = 0.25, inside the clip range of every convention, must lie in front of the view origin)."""
     nx, ny = _texel_ndc(res)
     inv_p = np.linalg.inv(tile.projection)
 
@@ -190,7 +191,7 @@ def _ray_points(tile: PortTile, res: int):
 
     p0, p1 = view_point(0.25), view_point(0.75)  # inside the clip volume of every convention
     d = p1 - p0
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    d *= (np.sign(d[:, 2] * p0[:, 2]) / np.linalg.norm(d, axis=1))[:, None]  # away from the eye / view plane
     ortho = np.allclose(tile.projection[3], [0.0, 0.0, 0.0, 1.0])
     origin = p0 - (p0[:, 2] / d[:, 2])[:, None] * d if ortho else np.zeros_like(p0)
     return origin, d
@@ -236,7 +237,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
     """Pack a port's shadow maps into vlref's :class:`~vlref.lights.shadowmaps.ShadowMaps` (module docstring).
 
     Returns ``{filter: ShadowMaps}`` for ``None`` (the scene's filter), ``"hard"`` and ``"pcf"``, ready
-    for :attr:`vlref.render.Frame._shadow_maps`.
+    for :attr:`vlref.render.Frame.shadow_cache`.
     """
     from ..lights.pack import F_DX, F_PX, F_RX, F_TAN_HALF, F_UX, I_KIND
     from ..lights.shadowmaps import (CUBE_FACES, MAX_CASCADES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET,
@@ -617,9 +618,8 @@ def port_frame(port: PortBuffers, file: str = "<port>"):
     zeros = np.zeros(port.depth.shape + (3,))
     gbuffer = GBuffer(port.depth, distance, position, zeros, zeros, zeros, np.where(hit, 0, -1).astype(np.int32))
     packed = pack_lights(port.scene)
-    frame = Frame(port.scene, cam, build_geometry(port.scene), gbuffer, packed, port.colour)
-    frame._shadow_maps.update(shadow_maps_from_port(port.scene, cam, packed, port.shadow_maps, file))
-    return frame
+    maps = shadow_maps_from_port(port.scene, cam, packed, port.shadow_maps, file)
+    return Frame(port.scene, cam, build_geometry(port.scene), gbuffer, packed, port.colour, shadow_cache=maps)
 
 
 def march_port(path, overrides: Sequence[str] = ()) -> dict[str, np.ndarray]:
@@ -632,8 +632,43 @@ def march_port(path, overrides: Sequence[str] = ()) -> dict[str, np.ndarray]:
     return out
 
 
+def _main_export(argv: Sequence[str]) -> int:
+    """``vlref march export SCENE -o DIR``: vlref's own buffers in a port's encodings (:func:`export_port`)."""
+    p = argparse.ArgumentParser(prog="vlref march export", description="Export vlref's depth buffer, scene colour "
+                                "and shadow maps in a port's encodings, with port.toml (docs/PORTING.md).")
+    p.add_argument("scene", help="scene file or bundled scene name")
+    p.add_argument("-o", "--output", required=True, help="output folder")
+    p.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE", help="override a scene field")
+    p.add_argument("--depth", default="raw:reversed", choices=["linear", "raw:d3d", "raw:gl", "raw:reversed"],
+                   help="camera depth encoding (default raw:reversed)")
+    p.add_argument("--shadow", default="depth:reversed",
+                   choices=["distance", "depth:linear", "depth:d3d", "depth:gl", "depth:reversed"],
+                   help="shadow map encoding (default depth:reversed)")
+    p.add_argument("--uv-origin", default="top", choices=["top", "bottom"])
+    p.add_argument("--camera-forward", default="+z", choices=["+z", "-z"])
+    try:
+        args = p.parse_args(list(argv))
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    depth_enc, _, depth_conv = args.depth.partition(":")
+    shadow_enc, _, shadow_conv = args.shadow.partition(":")
+    try:
+        path = export_port(args.scene, args.output, args.set, depth_encoding=depth_enc,
+                           depth_convention=depth_conv or "d3d", uv_origin=args.uv_origin,
+                           shadow_encoding=shadow_enc, shadow_convention=shadow_conv or "d3d",
+                           camera_forward=args.camera_forward)
+    except InputError as exc:
+        print(f"vlref march export: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
 def main_march(argv: Sequence[str]) -> int:
-    """``vlref march PORT.toml -o OUT [--stages] [--set K=V]``: 0 written, 2 bad input."""
+    """``vlref march PORT.toml -o OUT [--stages] [--set K=V]`` (0 written, 2 bad input), or
+    ``vlref march export SCENE -o DIR`` (:func:`_main_export`)."""
+    if argv and argv[0] == "export":
+        return _main_export(argv[1:])
     from ..io import output_dir, write_exr
     from ..render import scene_hash
 

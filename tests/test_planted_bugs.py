@@ -1,0 +1,36 @@
+"""The oracle catches real port bugs: each planted mistake FAILS `compare` under its port preset, while the
+faithful float32/fp16 port PASSES (tests/planted_ports.py builds both from vlref's own passes)."""
+
+import inspect
+
+import pytest
+
+from planted_ports import CASES, correct_port
+from vlref.oracle.compare import compare_arrays
+from vlref.render import render
+from vlref.scene import load_scene
+
+
+def _margin(report) -> str:
+    m, t = report.metrics, report.thresholds
+    return (f"failing {m['frac_failing']:.4f} / {t['max_fail_fraction']:g} = "
+            f"{m['frac_failing'] / t['max_fail_fraction']:.2f}x, mean {m['mean_abs']:.3g} / {t['mean_abs_bound']:.3g} "
+            f"= {m['mean_abs'] / t['mean_abs_bound']:.2f}x")
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c.name for c in CASES])
+def test_planted_bug_fails_and_correct_port_passes(case, monkeypatch):
+    scene = load_scene(case.scene, case.overrides)
+    ref = render(scene).buffers["final"]
+
+    good = compare_arrays(ref, correct_port(scene), case.preset, flip=False)
+    assert good.passed, f"faithful port rejected: {_margin(good)}"
+
+    port = case.port
+    bad_img = port(scene, monkeypatch) if "monkeypatch" in inspect.signature(port).parameters else port(scene)
+    bad = compare_arrays(ref, bad_img, case.preset, flip=False)
+    print(f"{case.name}: correct port {_margin(good)}; planted bug {_margin(bad)}")
+    assert not bad.passed, f"planted bug {case.name} passed {case.preset}: {_margin(bad)}"
+    # the bug is not a borderline call: at least one check exceeds its bound by 1.5x
+    m, t = bad.metrics, bad.thresholds
+    assert max(m["frac_failing"] / t["max_fail_fraction"], m["mean_abs"] / t["mean_abs_bound"]) > 1.5
