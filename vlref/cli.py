@@ -89,23 +89,25 @@ def cmd_bias(args) -> int:
     return 0
 
 
-def cmd_golden(args) -> int:
-    from .oracle.golden import main_golden
-    return main_golden(args.rest)
+def _passthrough(module: str, function: str):
+    """A sub-command whose own argument parser lives in ``vlref.<module>`` (imported when used)."""
+    def run(argv: list[str]) -> int:
+        import importlib
+        return int(getattr(importlib.import_module(f"vlref.{module}"), function)(argv))
+    return run
 
 
-def cmd_march(args) -> int:
-    from .oracle.port_buffers import main_march
-    return main_march(args.rest)
-
-
-def cmd_bench(args) -> int:
-    from .bench import main_bench
-    return main_bench(args.rest)
+# Sub-commands that parse their own arguments: ``vlref NAME ...`` hands everything after NAME over.
+PASSTHROUGH = {
+    "golden": (_passthrough("oracle.golden", "main_golden"), "build or verify the golden suite"),
+    "march": (_passthrough("oracle.port_buffers", "main_march"), "march and post passes on a port's own buffers"),
+    "bench": (_passthrough("bench", "main_bench"), "benchmarks (--quick, --json)"),
+}
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="vlref", description=__doc__.splitlines()[0] if __doc__ else None)
+    p = argparse.ArgumentParser(prog="vlref", description="vlref: a CPU reference renderer for real-time "
+                                "volumetric lighting (god rays). Exit codes: 0 ok, 1 compare/verify failed, 2 bad input.")
     p.add_argument("--version", action="version", version=f"vlref {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -147,16 +149,19 @@ def build_parser() -> argparse.ArgumentParser:
     add_arguments(c)
     c.set_defaults(func=run_compare)
 
-    for name, func, text in (("golden", cmd_golden, "build or verify the golden suite"),
-                             ("march", cmd_march, "march and post passes on a port's own buffers"),
-                             ("bench", cmd_bench, "benchmarks")):
-        sp = sub.add_parser(name, help=text, add_help=False)
-        sp.add_argument("rest", nargs=argparse.REMAINDER)
-        sp.set_defaults(func=func)
+    for name, (_, text) in PASSTHROUGH.items():
+        sub.add_parser(name, help=text, add_help=False)  # listed in --help; run by main() directly
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        if argv and argv[0] in PASSTHROUGH:
+            return PASSTHROUGH[argv[0]][0](argv[1:])
+    except InputError as exc:
+        print(f"vlref: error: {exc}", file=sys.stderr)
+        return 2
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
