@@ -143,8 +143,8 @@ print("live widgets:", live_widgets())"""),
 
 | control | physical, killzone | slightlymad | urp | radial |
 |---|---|---|---|---|
-| scattering σs, absorption σa | `medium` | `scattering`, `extinction = σs + σa` | — (no density) | — |
-| anisotropy g | `medium.anisotropy` | `mie_g` | `scattering = -g` (the tutorial's sign) | — |
+| scattering σs, absorption σa | `medium` | `medium` (`techniques.slightlymad.medium = "scene"`) | — (no density) | — |
+| anisotropy g | `medium.anisotropy` | `medium.anisotropy` (same switch) | `scattering = -g` (the tutorial's sign) | — |
 | light power | every light's `intensity` × factor | same | same | same |
 | steps | `render.steps` | `render.steps` (≤ 64) | `render.steps` (≥ 2) | — |
 | sampling | `render.sampling` (killzone: no `hash`) | `dither` (`none`/`bayer4`/`bayer8`) | — (own jitter) | — |
@@ -174,9 +174,8 @@ def explorer_scene(scene, technique, scattering, absorption, anisotropy, power, 
     return s.replace(techniques=dataclasses.replace(
         t,
         killzone=dataclasses.replace(t.killzone, blur=blur),
-        slightlymad=dataclasses.replace(t.slightlymad, blur=blur, depth_downsample=vl_depth,
-                                        scattering=scattering, extinction=scattering + absorption,
-                                        mie_g=anisotropy, dither=DITHER.get(sampling, "none")),
+        slightlymad=dataclasses.replace(t.slightlymad, medium="scene", blur=blur, depth_downsample=vl_depth,
+                                        dither=DITHER.get(sampling, "none")),
         urp=dataclasses.replace(t.urp, scattering=-anisotropy, gauss_samples=t.urp.gauss_samples if blur else 0)))
 
 
@@ -438,13 +437,13 @@ with the reference (`mean_rel` = error mass over signal mass). Besides each tech
 ships it, two variants remove approximations:
 
 * `killzone, exact`: full-resolution march, no blur, exact shadow rays instead of one shadow-map tap;
-* `slightlymad, matched`: VolumetricLights' own medium constants (`ScatteringCoef`, `ExtinctionCoef`,
-  `MieG`) set to the scene's medium.
+* `slightlymad, matched`: the scene's medium instead of VolumetricLights' own constants
+  (`ScatteringCoef`, `ExtinctionCoef`, `MieG`): `techniques.slightlymad.medium = "scene"`.
 
 A first-order march converges with slope -1. Whatever stays flat is bias: the technique computes
 something else than the single-scattering integral."""),
     ("code", """\
-tp, med = scene.techniques, scene.medium
+tp = scene.techniques
 VARIANTS = {
     "physical": ("physical", scene),
     "killzone": ("killzone", scene),
@@ -455,8 +454,7 @@ VARIANTS = {
             tp.killzone, resolution="full", blur=False, shadow_filter="exact")))),
     "slightlymad": ("slightlymad", scene),
     "slightlymad, matched": ("slightlymad", scene.replace(techniques=dataclasses.replace(
-        tp, slightlymad=dataclasses.replace(tp.slightlymad, scattering=med.scattering,
-                                            extinction=med.extinction, mie_g=med.anisotropy)))),
+        tp, slightlymad=dataclasses.replace(tp.slightlymad, medium="scene")))),
     "urp": ("urp", scene),
 }
 STEPS = (64, 32, 16, 8, 4)  # the first entry gives the bias image

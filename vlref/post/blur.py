@@ -19,9 +19,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit, prange
 
 from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice, check_positive, nearest_index, point_texel, uv_rows
+from vlref.post.resolution import ARGUMENTS, check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
 """``FULL/HALF/QUARTER_RES_BLUR_KERNEL_SIZE`` of VL's ``BilateralBlur.shader``."""
@@ -32,26 +33,99 @@ URP_GAUSS_WEIGHTS = (0.14446445, 0.13543542, 0.11153505, 0.08055309, 0.05087564,
 
 DEPTH_WEIGHTS = ("gaussian", "inverse")
 
+_GAUSSIAN, _UNIT, _INVERSE = 0, 1, 2   # depth-weight codes of the kernels (_UNIT: gaussian with factor 0)
+
 
 def depth_delta(a, b) -> np.ndarray:
-    """``|a - b|`` with equal values (``inf`` and ``inf`` included) giving exactly 0."""
+    """``|a - b|`` with equal values (``inf`` and ``inf`` included) giving exactly 0 (arrays)."""
     with np.errstate(invalid="ignore"):
         return np.where(a == b, 0.0, np.abs(np.subtract(a, b, dtype=np.float64)))
 
 
-def depth_weight(dz, kind: str = "gaussian", factor: float = 1.0, epsilon: float = 1e-3) -> np.ndarray:
-    """``exp(-(dz*factor)^2)`` (``"gaussian"``) or ``1/(dz + epsilon)`` (``"inverse"``, ``epsilon > 0``).
+@njit(cache=True, fastmath=False)
+def depth_delta_at(a, b):
+    """:func:`depth_delta` of two scalars, for njit kernels."""
+    return 0.0 if a == b else abs(a - b)
 
-    0 for ``dz = inf``; ``factor = 0`` gives 1 everywhere (no depth term).
+
+@njit(cache=True, fastmath=False)
+def _depth_weight(dz, code, factor, epsilon):
+    """``exp(-(dz*factor)^2)`` (``_GAUSSIAN``), 1 (``_UNIT``) or ``1/(dz + epsilon)`` (``_INVERSE``).
+
+    The Gaussian skips ``exp`` where its value is known exactly: 1 at argument 0, 0 below -746
+    (``exp`` underflows to 0 below ``-1075 ln 2 = -745.13``), so the bits are ``exp``'s.
     """
+    if code == _GAUSSIAN:
+        s = dz * factor
+        q = s * s
+        if q == 0.0:
+            return 1.0
+        if q > 746.0:
+            return 0.0
+        return math.exp(-q)
+    if code == _UNIT:
+        return 1.0
+    return 1.0 / (dz + epsilon)
+
+
+def _weight_code(kind: str, factor: float, epsilon: float) -> int:
+    """The kernel code of a depth weight: ``"gaussian"`` ``exp(-(dz*factor)^2)`` (0 for ``dz = inf``;
+    ``factor = 0`` gives 1 everywhere, no ``inf * 0`` for sky) or ``"inverse"`` ``1/(dz + epsilon)``,
+    ``epsilon > 0``."""
     check_choice("depth_weight", kind, DEPTH_WEIGHTS)
     if kind == "gaussian":
-        if factor == 0.0:                       # no depth term (and no inf * 0 for sky)
-            return np.ones(np.shape(dz))
-        s = dz * factor
-        return np.exp(-(s * s))
+        return _UNIT if factor == 0.0 else _GAUSSIAN
     check_positive("epsilon", epsilon)
-    return 1.0 / (dz + epsilon)
+    return _INVERSE
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _blur_lines(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor, epsilon, out):
+    """``out = sum_t g_t W(dz_t) v_t / sum_t g_t W(dz_t)`` along ``axis``, taps in table order.
+
+    ``v``, ``out`` ``(H, W, C)``; position ``j`` along the axis reads value texel ``taps_v[j, t]``
+    (same line) and depth texel ``taps_z[j, t]`` of depth line ``cross[line]``; its reference depth
+    is ``centre[j]`` of that line. Products and sums in float64 in the order of the NumPy form
+    (``w = g_t W``, ``acc += w v``, ``wsum += w``, tap by tap). Each output row is one iteration
+    (taps outer, pixels inner, per-pixel sums in a row buffer), so the bits do not depend on the
+    thread count.
+    """
+    H, W, C = v.shape
+    for pr in prange(H):
+        r = np.int64(pr)                      # a typed row index (prange's may be unsigned)
+        wsum = np.zeros(W)
+        out[r] = 0.0
+        for t in range(g.shape[0]):
+            if axis == 1:
+                zr = z[cross[r]]
+                for c in range(W):
+                    w = g[t] * _depth_weight(depth_delta_at(zr[taps_z[c, t]], zr[centre[c]]), code, factor, epsilon)
+                    p = taps_v[c, t]
+                    for ch in range(C):
+                        out[r, c, ch] += w * v[r, p, ch]
+                    wsum[c] += w
+            else:
+                z0, zk, vk = z[centre[r]], z[taps_z[r, t]], v[taps_v[r, t]]
+                for c in range(W):
+                    x = cross[c]
+                    w = g[t] * _depth_weight(depth_delta_at(zk[x], z0[x]), code, factor, epsilon)
+                    for ch in range(C):
+                        out[r, c, ch] += w * vk[c, ch]
+                    wsum[c] += w
+        for c in range(W):
+            for ch in range(C):
+                out[r, c, ch] /= wsum[c]
+
+
+def _run_blur(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor=1.0, epsilon=1.0) -> np.ndarray:
+    """:func:`_blur_lines` on ``(H, W)`` or ``(H, W, C)`` values; returns the shape of ``v``."""
+    v3 = np.ascontiguousarray(v).reshape(v.shape[0], v.shape[1], -1)
+    out = np.empty(v3.shape)
+    _blur_lines(v3, np.ascontiguousarray(z), axis, np.ascontiguousarray(taps_v, dtype=np.int64),
+                np.ascontiguousarray(taps_z, dtype=np.int64), np.ascontiguousarray(centre, dtype=np.int64),
+                np.ascontiguousarray(cross, dtype=np.int64), np.asarray(g, dtype=np.float64), code, float(factor),
+                float(epsilon), out)
+    return out.reshape(v.shape)
 
 
 def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
@@ -62,26 +136,11 @@ def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
     return (1.0 / math.sqrt(2.0 * math.pi * sigma * sigma)) * np.exp(-(i * i) / (2.0 * sigma * sigma))
 
 
-def _weighted_mean(terms) -> np.ndarray:
-    """``sum w v / sum w`` over ``terms = [(w (H,W), v (H,W[,C])), ...]``, summed left to right."""
-    acc = wsum = 0.0
-    for w, v in terms:
-        acc = acc + (w[..., None] if v.ndim == 3 else w) * v
-        wsum = wsum + w
-    return acc / (wsum[..., None] if np.ndim(acc) == 3 else wsum)
-
-
 def _values(values) -> np.ndarray:
     v = np.asarray(values, dtype=np.float64)
     if v.ndim not in (2, 3):
         raise InputError(ARGUMENTS, "values", f"expected (H, W) or (H, W, C), got shape {v.shape}")
     return v
-
-
-def _shift(a: np.ndarray, axis: int, k: int) -> np.ndarray:
-    """``a`` read at integer offset ``k`` along ``axis`` with clamp addressing."""
-    n = a.shape[axis]
-    return a.take(np.clip(np.arange(n) + k, 0, n - 1), axis=axis)
 
 
 def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, depth_weight_kind: str = "gaussian",
@@ -98,17 +157,17 @@ def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, d
     z = np.asarray(depth, dtype=np.float64)
     if z.shape != v.shape[:2]:
         raise InputError(ARGUMENTS, "depth", f"depth shape {z.shape} does not match values {v.shape[:2]}")
+    if keep_alpha and v.ndim != 3:
+        raise InputError(ARGUMENTS, "values", "keep_alpha needs an (H, W, C) buffer")
+    code = _weight_code(depth_weight_kind, depth_factor, epsilon)
     g = np.asarray(gauss, dtype=np.float64)
     radius = len(g) - 1
-    centre_w = np.full(z.shape, g[0]) * depth_weight(np.zeros(z.shape), depth_weight_kind, depth_factor, epsilon)
-    terms = [(centre_w, v)]
-    for k in list(range(-radius, 0)) + list(range(1, radius + 1)):
-        w = g[abs(k)] * depth_weight(depth_delta(z, _shift(z, axis, k)), depth_weight_kind, depth_factor, epsilon)
-        terms.append((w, _shift(v, axis, k)))
-    out = _weighted_mean(terms)
+    k = np.array([0] + list(range(-radius, 0)) + list(range(1, radius + 1)), dtype=np.int64)
+    n = v.shape[axis]
+    taps = np.clip(np.arange(n)[:, None] + k[None, :], 0, n - 1)
+    out = _run_blur(v, z, axis, taps, taps, np.arange(n), np.arange(v.shape[1 - axis]), g[np.abs(k)], code,
+                    depth_factor, epsilon)
     if keep_alpha:
-        if v.ndim != 3:
-            raise InputError(ARGUMENTS, "values", "keep_alpha needs an (H, W, C) buffer")
         out[..., -1] = v[..., -1]
     return out
 
@@ -150,27 +209,32 @@ def _urp_gauss(taps: int, weights) -> np.ndarray:
     return g
 
 
-def _urp_axes(fog, depth_full, axis: int, uv_origin: str):
+def _urp_axes(fog, depth_full, axis: int):
     check_choice("axis", axis, (0, 1))
     f = _values(fog)
     z = np.asarray(depth_full, dtype=np.float64)
     if z.ndim != 2 or z.shape[0] < f.shape[0] or z.shape[1] < f.shape[1]:
         raise InputError(ARGUMENTS, "depth", f"full-res depth {z.shape} cannot feed low-res fog {f.shape[:2]}")
-    return uv_rows(f, uv_origin), uv_rows(z, uv_origin)
+    return f, z
 
 
-def _urp_pass(f, z, axis, offsets_lo, offsets_hi, centre_hi, g, falloff):
-    """Shared URP accumulation: taps ``k = -n..n`` read fog at ``offsets_lo[k]`` and depth at ``offsets_hi[k]``."""
-    other = 1 - axis
-    cross = nearest_index(z.shape[other], f.shape[other])   # full-res texel under each low-res line
-    z = z.take(cross, axis=other)                             # (h, W) or (H, w): one line per low-res line
-    z0 = z.take(centre_hi, axis=axis)
-    terms = []
-    for k in sorted(offsets_lo):
-        zk = z.take(offsets_hi[k], axis=axis)
-        w = depth_weight(depth_delta(zk, z0), "gaussian", falloff) * g[abs(k)]
-        terms.append((w, f.take(offsets_lo[k], axis=axis)))
-    return _weighted_mean(terms)
+def _urp_pass(f, z, axis, taps_lo, taps_hi, centre_hi, g, falloff, uv_origin):
+    """Shared URP accumulation over the tap tables ``(n_lo, 2n + 1)`` (``k = -n..n``), built in uv order.
+
+    Tap ``k`` of low-res texel ``j`` reads fog texel ``taps_lo[j, k]`` and full-res depth texel
+    ``taps_hi[j, k]``, weighed against depth texel ``centre_hi[j]``; the other axis reads the
+    full-res texel under the low-res line (``nearest_index``). Vertical maps are turned into array
+    rows (:func:`~vlref.post.resolution.uv_row_map`), so the arrays are read in place.
+    """
+    cross = nearest_index(z.shape[1 - axis], f.shape[1 - axis])
+    if axis == 0:
+        taps_lo = uv_row_map(taps_lo, f.shape[0], uv_origin)
+        taps_hi = uv_row_map(taps_hi, z.shape[0], uv_origin)
+        centre_hi = uv_row_map(centre_hi, z.shape[0], uv_origin)
+    else:
+        cross = uv_row_map(cross, z.shape[0], uv_origin)
+    return _run_blur(f, z, axis, taps_lo, taps_hi, centre_hi, cross, g, _weight_code("gaussian", falloff, 1.0),
+                     falloff)
 
 
 def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: float, falloff: float = 100.0,
@@ -187,14 +251,13 @@ def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: floa
     rounding). ``uv_origin`` fixes which texel an exact edge rounds to on the vertical axis.
     """
     g = _urp_gauss(samples, weights)
-    f, z = _urp_axes(fog, depth_full, axis, uv_origin)
+    f, z = _urp_axes(fog, depth_full, axis)
     n_lo, n_hi = f.shape[axis], z.shape[axis]
+    k = np.arange(-samples, samples + 1)
     u = (np.arange(n_lo) + 0.5) / n_lo
-    uk = {k: u + (k * amount) / 1000.0 for k in range(-samples, samples + 1)}
-    lo = {k: point_texel(uk[k], n_lo) for k in uk}
-    hi = {k: point_texel(uk[k], n_hi) for k in uk}
-    out = _urp_pass(f, z, axis, lo, hi, point_texel(u, n_hi), g, falloff)
-    return uv_rows(out, uv_origin)
+    uk = u[:, None] + (k[None, :] * amount) / 1000.0
+    return _urp_pass(f, z, axis, point_texel(uk, n_lo), point_texel(uk, n_hi), point_texel(u, n_hi), g[np.abs(k)],
+                     falloff, uv_origin)
 
 
 def urp_repo_blur_pass(fog, depth_full, axis: int, taps: int = 5, falloff: float = 100.0,
@@ -206,14 +269,13 @@ def urp_repo_blur_pass(fog, depth_full, axis: int, taps: int = 5, falloff: float
     mismatch whenever ``f > 1``. Weights and order as :func:`urp_article_blur_pass`.
     """
     g = _urp_gauss(taps, weights)
-    f, z = _urp_axes(fog, depth_full, axis, uv_origin)
+    f, z = _urp_axes(fog, depth_full, axis)
     n_lo, n_hi = f.shape[axis], z.shape[axis]
-    j = np.arange(n_lo)
+    k = np.arange(-taps, taps + 1)
     c = nearest_index(n_hi, n_lo)
-    lo = {k: np.clip(j + k, 0, n_lo - 1) for k in range(-taps, taps + 1)}
-    hi = {k: np.clip(c + k, 0, n_hi - 1) for k in range(-taps, taps + 1)}
-    out = _urp_pass(f, z, axis, lo, hi, c, g, falloff)
-    return uv_rows(out, uv_origin)
+    lo = np.clip(np.arange(n_lo)[:, None] + k[None, :], 0, n_lo - 1)
+    hi = np.clip(c[:, None] + k[None, :], 0, n_hi - 1)
+    return _urp_pass(f, z, axis, lo, hi, c, g[np.abs(k)], falloff, uv_origin)
 
 
 def blur_hv(pass_fn, values, depth, **params) -> tuple[np.ndarray, np.ndarray]:

@@ -67,6 +67,19 @@ def uv_rows(a: np.ndarray, uv_origin: str) -> np.ndarray:
     return a[::-1] if uv_origin == "bottom" else a
 
 
+def uv_row_map(index, n_src: int, uv_origin: str) -> np.ndarray:
+    """A row map computed in uv rows, re-expressed in array rows.
+
+    ``index[i]`` (first axis: destination row ``i`` counted in increasing ``v``) is the source row
+    it reads, also counted in ``v``; the result gives, per destination *array* row, the source's
+    *array* row: ``index`` itself for ``"top"``, ``n_src - 1 - index[::-1]`` for ``"bottom"``
+    (:func:`uv_rows` applied to both sides). A pass that works in uv rows can thus read its
+    top-first arrays in place.
+    """
+    flipped = uv_rows(np.asarray(index), uv_origin)
+    return n_src - 1 - flipped if uv_origin == "bottom" else flipped
+
+
 def nearest_index(n_src: int, n_dst: int) -> np.ndarray:
     """The source texel a point sampler returns at each destination texel centre.
 
