@@ -9,7 +9,7 @@ from hypothesis import given, strategies as st
 
 from vlref.errors import InputError
 from vlref.post.resolution import (block_ranges, bilinear_footprint, gather_footprint, low_res_size, nearest_index,
-                                   point_texel, resolution_factor, uv_rows)
+                                   point_texel, resolution_factor, uv_row_map, uv_rows)
 
 ns = st.integers(1, 40)
 
@@ -96,3 +96,16 @@ def test_uv_rows_flips_only_for_bottom_origin():
     assert (uv_rows(uv_rows(a, "bottom"), "bottom") == a).all()
     with pytest.raises(InputError):
         uv_rows(a, "left")
+
+
+@given(ns, ns, st.integers(1, 4))
+def test_uv_row_map_reads_flipped_arrays_in_place(n_src, n_dst, taps):
+    # a map built in uv rows, applied to top-first arrays, equals flipping both arrays around it
+    rng = np.random.default_rng(n_src * 100 + n_dst)
+    index = rng.integers(0, n_src, size=(n_dst, taps))
+    src = rng.random(n_src)
+    for origin in ("top", "bottom"):
+        mapped = uv_row_map(index, n_src, origin)
+        assert mapped.shape == index.shape and mapped.min() >= 0 and mapped.max() < n_src
+        np.testing.assert_array_equal(src[mapped], uv_rows(uv_rows(src, origin)[index], origin))
+    np.testing.assert_array_equal(uv_row_map(index, n_src, "top"), index)

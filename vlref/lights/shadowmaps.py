@@ -114,7 +114,9 @@ def cascade_splits(near: float, far: float, count: int, split_lambda: float) -> 
     return split_lambda * near * (far / near) ** i + (1.0 - split_lambda) * (near + (far - near) * i)
 
 
-def _slice_sphere(camera: Camera, z0: float, z1: float) -> tuple[np.ndarray, float]:
+def cascade_sphere(camera: Camera, z0: float, z1: float) -> tuple[np.ndarray, float]:
+    """Bounding sphere ``(centre, radius)`` of the view-frustum slice between eye depths ``z0`` and ``z1``
+    (its 8 corners' mean and largest distance): the region a cascade's orthographic map covers."""
     t = camera.tan_half_fov
     corners = np.array([[sx * z * t * camera.aspect, sy * z * t, z] for z in (z0, z1)
                         for sx in (-1, 1) for sy in (-1, 1)])
@@ -146,7 +148,8 @@ def _cast_map(geo, origins, dirs, start, tmax, bias, slope_bias, want_tint, out,
                 tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
 
 
-def _grid(res: int) -> tuple[np.ndarray, np.ndarray]:
+def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
+    """NDC ``(x, y)`` of the texel centres of a ``res``² map, flattened row-major, row 0 at the top (y = +1)."""
     x = (np.arange(res) + 0.5) / res * 2.0 - 1.0
     return np.broadcast_to(x[None, :], (res, res)).reshape(-1), np.broadcast_to(-x[:, None], (res, res)).reshape(-1)
 
@@ -154,7 +157,7 @@ def _grid(res: int) -> tuple[np.ndarray, np.ndarray]:
 def _perspective(pos, right, up, fwd, scale, near, res):
     """Rays of a perspective face, ``v = fwd + x·scale·right + y·scale·up``: origins on the near plane,
     unit directions, and the distance from the light to each origin."""
-    x, y = _grid(res)
+    x, y = texel_grid(res)
     v = fwd[None, :] + (x * scale)[:, None] * right[None, :] + (y * scale)[:, None] * up[None, :]
     length = np.linalg.norm(v, axis=1)
     dirs = v / length[:, None]
@@ -203,9 +206,9 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
             ints[i, S_CASCADES] = sh.cascades
             corners = np.array(list(itertools.product(*zip(geometry.bounds_min, geometry.bounds_max))))
             for k in range(sh.cascades):
-                centre, radius = _slice_sphere(camera, splits[k], splits[k + 1])
+                centre, radius = cascade_sphere(camera, splits[k], splits[k + 1])
                 back = radius + max(0.0, float(((centre - corners) @ fwd).max())) + 1.0
-                x, y = _grid(res)
+                x, y = texel_grid(res)
                 o = centre + (x * radius)[:, None] * right + (y * radius)[:, None] * up - back * fwd
                 d = np.broadcast_to(fwd, o.shape)
                 floats[i, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)

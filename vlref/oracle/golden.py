@@ -46,7 +46,13 @@ __all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "re
            "main_golden", "GOLDEN_DIR", "SUITE_FILE", "MANIFEST"]
 
 SUITE_FILE = Path(__file__).resolve().parents[1] / "data" / "golden_suite.toml"
-GOLDEN_DIR = Path(__file__).resolve().parents[2] / "data" / "golden"
+def _default_golden_dir() -> Path:
+    """``data/golden`` of the source checkout vlref runs from, else of the working directory."""
+    checkout = Path(__file__).resolve().parents[2] / "data" / "golden"
+    return checkout if checkout.is_dir() else Path.cwd() / "data" / "golden"
+
+
+GOLDEN_DIR = _default_golden_dir()
 MANIFEST = "manifest.json"
 FORMAT = 1
 

@@ -72,6 +72,7 @@ import numpy as np
 
 from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings, raw_to_linear
 from ..errors import InputError
+from ..lights.shadowmaps import texel_grid
 
 __all__ = ["PortTile", "PortShadowMap", "PortBuffers", "load_port", "decode_depth", "camera_from_matrices",
            "shadow_maps_from_port", "port_frame", "march_port", "main_march", "export_port", "orthographic",
@@ -171,18 +172,11 @@ def camera_from_matrices(view, projection, width: int, height: int, convention: 
     return Camera(-rot @ v[:3, 3], rot, math.degrees(2.0 * math.atan(1.0 / p[1, 1])), width, height, near, far)
 
 
-def _texel_ndc(res: int):
-    """NDC x, y (res*res,) of the texel centres of a square map, row 0 = top (NDC y = +1)."""
-    from ..lights.shadowmaps import _grid
-
-    return _grid(res)
-
-
 def _ray_points(tile: PortTile, res: int):
     """View-space texel-centre rays of a tile: origins (n, 3) on the plane z = 0 (orthographic) or at the
     eye (perspective), and unit directions (n, 3) pointing into the map's volume (whose points at NDC
     z = 0.25, inside the clip range of every convention, must lie in front of the view origin)."""
-    nx, ny = _texel_ndc(res)
+    nx, ny = texel_grid(res)
     inv_p = np.linalg.inv(tile.projection)
 
     def view_point(z):
@@ -204,7 +198,7 @@ def _tile_points(tile: PortTile, encoding: str, convention: str) -> np.ndarray:
     inv_v = np.linalg.inv(tile.view)
     if encoding == "depth" and convention != "linear":
         empty = (val == FAR_VALUE[convention]) | ~np.isfinite(val)
-        nx, ny = _texel_ndc(res)
+        nx, ny = texel_grid(res)
         h = np.stack([nx, ny, np.where(empty, 0.5, val), np.ones(val.shape)], axis=1) @ np.linalg.inv(
             tile.projection @ tile.view).T
         world = h[:, :3] / h[:, 3:4]
@@ -241,7 +235,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
     """
     from ..lights.pack import F_DX, F_PX, F_RX, F_TAN_HALF, F_UX, I_KIND
     from ..lights.shadowmaps import (CUBE_FACES, MAX_CASCADES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET,
-                                     S_RES, S_STRENGTH, SHADOW_HARD, SHADOW_PCF, ShadowMaps, _slice_sphere)
+                                     S_RES, S_STRENGTH, SHADOW_HARD, SHADOW_PCF, ShadowMaps, cascade_sphere)
 
     n = packed.count
     ints, floats = np.zeros((n, NSI), dtype=np.int64), np.zeros((n, NSF))
@@ -268,7 +262,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
             raise InputError(file, key, f"a {light.type} light needs {expected if kind != 2 else '1..8'} tile(s) "
                                         f"({'len(splits) - 1' if kind == 2 else 'one per face' if kind == 0 else 'one'}),"
                                         f" got {len(m.tiles)}")
-        x, y = _texel_ndc(res)
+        x, y = texel_grid(res)
         ordered = m.tiles
         if kind == 0:
             faces = [t.face for t in m.tiles]
@@ -288,7 +282,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
                 value = np.linalg.norm(world - pos, axis=1)
                 name = f"shadow_point_{m.light}_face_{CUBE_ORDER[k]}"
             else:
-                centre, radius = _slice_sphere(camera, m.splits[k], m.splits[k + 1])
+                centre, radius = cascade_sphere(camera, m.splits[k], m.splits[k + 1])
                 eye = np.linalg.inv(tile.view)[:3, 3]
                 back = float((centre - eye) @ fwd)
                 floats[m.light, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)
@@ -494,7 +488,7 @@ def _light_tiles(scene, camera: Camera, maps, light: int, packed, encoding: str,
     kind = int(packed.ints[light, I_KIND])
     bufs = [(name, maps.data[start:start + count]) for name, li, start, count in maps.names if li == light]
     res = int(round(math.sqrt(bufs[0][1].size)))
-    x, y = _texel_ndc(res)
+    x, y = texel_grid(res)
     tiles, splits = [], ()
     for k, (name, stored) in enumerate(bufs):
         stored = stored.astype(np.float64)

@@ -12,6 +12,10 @@ clamp addressing (the sources' RT wrap modes are [U], research §1.9/§7).
 Depth weight ``W_k`` of a tap with depth difference ``dz = |z_k - z_0|`` (:func:`depth_delta`, with
 ``inf - inf = 0`` so sky matches sky): ``"gaussian"`` ``exp(-(dz * c) * (dz * c))`` (VL, URP) or
 ``"inverse"`` ``1 / (dz + eps)`` (the thesis's "in the same way as the bilateral up-sampling").
+
+Every pass runs one Numba kernel (:func:`_blur_lines`) over tap tables built here: per texel along
+the axis, the value texel and depth texel of each tap, in summation order. Vertical maps of the
+passes defined in Unity's uv are turned into array rows (:func:`~vlref.post.resolution.uv_row_map`).
 """
 
 from __future__ import annotations
@@ -85,14 +89,13 @@ def _blur_lines(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor, epsi
 
     ``v``, ``out`` ``(H, W, C)``; position ``j`` along the axis reads value texel ``taps_v[j, t]``
     (same line) and depth texel ``taps_z[j, t]`` of depth line ``cross[line]``; its reference depth
-    is ``centre[j]`` of that line. Products and sums in float64 in the order of the NumPy form
-    (``w = g_t W``, ``acc += w v``, ``wsum += w``, tap by tap). Each output row is one iteration
+    is ``centre[j]`` of that line. Products and sums in float64, tap by tap in table order
+    (``w = g_t W``, ``acc += w v``, ``wsum += w``, both from 0). Each output row is one iteration
     (taps outer, pixels inner, per-pixel sums in a row buffer), so the bits do not depend on the
     thread count.
     """
     H, W, C = v.shape
-    for pr in prange(H):
-        r = np.int64(pr)                      # a typed row index (prange's may be unsigned)
+    for r in prange(H):
         wsum = np.zeros(W)
         out[r] = 0.0
         for t in range(g.shape[0]):

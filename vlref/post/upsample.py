@@ -113,8 +113,8 @@ def _thesis_kernel(lo, zl, zh, ra, rb, ty, ca, cb, tx, epsilon, out):
                 w00, w10, w01, w11 = b00, b10, b01, b11
                 wsum = ((b00 + b10) + b01) + b11
             for ch in range(C):
-                acc = (((0.0 + w00 * lo[r0, c0, ch]) + w10 * lo[r0, c1, ch]) + w01 * lo[r1, c0, ch]) + w11 * lo[r1, c1, ch]
-                out[r, c, ch] = acc / wsum
+                acc = ((0.0 + w00 * lo[r0, c0, ch]) + w10 * lo[r0, c1, ch]) + w01 * lo[r1, c0, ch]
+                out[r, c, ch] = (acc + w11 * lo[r1, c1, ch]) / wsum
 
 
 def thesis_upsample(lo, depth_lo, depth_hi, epsilon: float = 1e-3) -> np.ndarray:
