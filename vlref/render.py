@@ -100,14 +100,15 @@ class Frame:
         """
         if shadow_filter not in self.shadow_cache:
             from .lights.shadowmaps import build_shadow_maps
-            scene = self.scene
-            if shadow_filter is not None:
-                lights = tuple(dataclasses.replace(l, shadows=dataclasses.replace(l.shadows, filter=shadow_filter))
-                               if l.shadows is not None else l for l in scene.lights)
-                if lights == scene.lights:
-                    return self.shadow_maps()
-                scene = scene.replace(lights=lights)
-            self.shadow_cache[shadow_filter] = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
+            maps = None if shadow_filter is None else self.shadow_maps().with_filter(shadow_filter)
+            if maps is None:
+                scene = self.scene
+                if shadow_filter is not None:
+                    scene = scene.replace(lights=tuple(
+                        dataclasses.replace(l, shadows=dataclasses.replace(l.shadows, filter=shadow_filter))
+                        if l.shadows is not None else l for l in scene.lights))
+                maps = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
+            self.shadow_cache[shadow_filter] = maps
         return self.shadow_cache[shadow_filter]
 
 
@@ -159,8 +160,8 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
                "object_id": g.object_id}
     if stages:
         buffers.update({k: v for k, v in out.items() if k not in buffers})
-        for maps in frame.shadow_cache.values():
-            buffers.update(maps.buffers())
+        if frame.shadow_cache:
+            buffers.update(next(iter(frame.shadow_cache.values())).buffers())
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}

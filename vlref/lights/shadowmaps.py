@@ -94,6 +94,17 @@ class ShadowMaps:
     tint: np.ndarray
     names: list = field(default_factory=list)
 
+    def with_filter(self, shadow_filter: str) -> "ShadowMaps | None":
+        """The same maps looked up with ``shadow_filter`` (``hard``, ``pcf``, ``exact``) by every shadowed
+        light, without casting them again; None when a map it needs was never built (an ``exact`` light)."""
+        mode = FILTER_MODES[shadow_filter]
+        ints = self.ints.copy()
+        shadowed = ints[:, S_MODE] != SHADOW_NONE
+        if mode != SHADOW_EXACT and np.any(ints[shadowed, S_MODE] == SHADOW_EXACT):
+            return None
+        ints[shadowed, S_MODE] = mode
+        return ShadowMaps(ints, self.floats, self.data, self.tint, self.names)
+
     def buffers(self) -> dict[str, np.ndarray]:
         """Every map as a named (res, res) float32 buffer, plus ``<name>_transparent_distance`` (res, res)
         and ``<name>_transmittance`` (res, res, 3) for maps with a transparent layer."""
