@@ -33,7 +33,8 @@ from numba import njit
 
 from .primitives import hit_triangle
 
-__all__ = ["Bvh", "build_bvh", "build_box_bvh", "ray_box", "bvh_closest", "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
+__all__ = ["Bvh", "build_bvh", "build_box_bvh", "ray_box", "descend", "pop_nearer", "push_children", "bvh_closest",
+           "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
 
 BINS = 16
 SAH_DEPTH = 48
@@ -240,6 +241,46 @@ def _inverse(d):
     return 1.0 / (d if d != 0.0 else 1e-300)
 
 
+@njit(cache=True, fastmath=False, inline="always")
+def descend(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best, stack, stack_t, top):
+    """Closest-hit traversal step at an interior node whose children are ``left``, ``left + 1``: returns
+    ``(node, top)`` — the nearer child hit by the ray (the farther one pushed with its entry distance),
+    or ``-1`` when neither child box is hit before ``best``."""
+    tl = ray_box(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best)
+    tr = ray_box(node_min, node_max, left + 1, ox, oy, oz, ix, iy, iz, tmin, best)
+    if tl == INF and tr == INF:
+        return -1, top
+    if tr == INF:
+        return left, top
+    if tl == INF:
+        return left + 1, top
+    near, far, tfar = (left, left + 1, tr) if tl <= tr else (left + 1, left, tl)
+    stack[top], stack_t[top] = far, tfar
+    return near, top + 1
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def pop_nearer(stack, stack_t, top, node, best):
+    """``(node, top)``: ``node`` if set, else the next pushed node whose entry distance is ``<= best``
+    (farther ones are skipped: they cannot hold a closer hit); ``-1`` when the stack runs out."""
+    while node < 0 and top > 0:
+        top -= 1
+        if stack_t[top] <= best:
+            node = stack[top]
+    return node, top
+
+
+@njit(cache=True, fastmath=False, inline="always")
+def push_children(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top):
+    """Any-hit traversal step: push the children ``left``, ``left + 1`` whose boxes the ray crosses in
+    ``(tmin, tmax)``; returns the new stack top."""
+    for child in range(left, left + 2):
+        if ray_box(node_min, node_max, child, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
+            stack[top] = child
+            top += 1
+    return top
+
+
 @njit(cache=True, fastmath=False)
 def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only,
                 ox, oy, oz, dx, dy, dz, tmin, tmax):
@@ -269,24 +310,9 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
                         best, found = t, i
             node = -1
         else:
-            left = node_first[node]
-            tl = ray_box(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best)
-            tr = ray_box(node_min, node_max, left + 1, ox, oy, oz, ix, iy, iz, tmin, best)
-            if tl == INF and tr == INF:
-                node = -1
-            elif tr == INF:
-                node = left
-            elif tl == INF:
-                node = left + 1
-            else:
-                near, far, tfar = (left, left + 1, tr) if tl <= tr else (left + 1, left, tl)
-                stack[top], stack_t[top] = far, tfar
-                top += 1
-                node = near
-        while node < 0 and top > 0:
-            top -= 1
-            if stack_t[top] <= best:
-                node = stack[top]
+            node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
+                                stack, stack_t, top)
+        node, top = pop_nearer(stack, stack_t, top, node, best)
         if node < 0:
             break
     if found < 0:
@@ -329,11 +355,7 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
         top -= 1
         node = stack[top]
         if node_count[node] == 0:
-            left = node_first[node]
-            for child in range(left, left + 2):
-                if ray_box(node_min, node_max, child, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
-                    stack[top] = child
-                    top += 1
+            top = push_children(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top)
             continue
         first = node_first[node]
         for i in range(first, first + node_count[node]):

@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .bvh import STACK, Bvh, _inverse, build_box_bvh, ray_box
+from .bvh import STACK, Bvh, _inverse, build_box_bvh, descend, pop_nearer, push_children, ray_box
 from .primitives import hit_primitive
 
 __all__ = ["PRIM_PAD", "PRIM_LEAF", "build_primitive_bvh", "prims_closest", "prims_occluded"]
@@ -74,24 +74,9 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
                     best, best_k, nx, ny, nz = t, k, ax, ay, az
             node = -1
         else:
-            left = node_first[node]
-            tl = ray_box(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best)
-            tr = ray_box(node_min, node_max, left + 1, ox, oy, oz, ix, iy, iz, tmin, best)
-            if tl == INF and tr == INF:
-                node = -1
-            elif tr == INF:
-                node = left
-            elif tl == INF:
-                node = left + 1
-            else:
-                near, far, tfar = (left, left + 1, tr) if tl <= tr else (left + 1, left, tl)
-                stack[top], stack_t[top] = far, tfar
-                top += 1
-                node = near
-        while node < 0 and top > 0:
-            top -= 1
-            if stack_t[top] <= best:
-                node = stack[top]
+            node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
+                                stack, stack_t, top)
+        node, top = pop_nearer(stack, stack_t, top, node, best)
         if node < 0:
             break
     return best, best_k, nx, ny, nz
@@ -113,11 +98,7 @@ def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row,
         top -= 1
         node = stack[top]
         if node_count[node] == 0:
-            left = node_first[node]
-            for child in range(left, left + 2):
-                if ray_box(node_min, node_max, child, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
-                    stack[top] = child
-                    top += 1
+            top = push_children(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top)
             continue
         first = node_first[node]
         for j in range(first, first + node_count[node]):
