@@ -33,8 +33,8 @@ from numba import njit
 
 from .primitives import hit_triangle
 
-__all__ = ["Bvh", "build_bvh", "build_box_bvh", "ray_box", "descend", "pop_nearer", "push_children", "bvh_closest",
-           "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
+__all__ = ["Bvh", "build_bvh", "build_box_bvh", "ray_box", "descend", "pop_nearer", "push_children", "next_leaf",
+           "bvh_closest", "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
 
 BINS = 16
 SAH_DEPTH = 48
@@ -281,6 +281,19 @@ def push_children(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, tmax, 
     return top
 
 
+@njit(cache=True, fastmath=False, inline="always")
+def next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top):
+    """Any-hit traversal: pop nodes (pushing the crossed children of interior ones) until a leaf;
+    returns ``(leaf, top)``, or ``(-1, 0)`` when the stack runs out."""
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if node_count[node] > 0:
+            return node, top
+        top = push_children(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top)
+    return -1, top
+
+
 @njit(cache=True, fastmath=False)
 def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only,
                 ox, oy, oz, dx, dy, dz, tmin, tmax):
@@ -351,12 +364,11 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
         stack[0] = 0
         top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if node_count[node] == 0:
-            top = push_children(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top)
-            continue
+    while True:
+        node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
+                              stack, top)
+        if node < 0:
+            break
         first = node_first[node]
         for i in range(first, first + node_count[node]):
             t = hit_triangle(v0, e1, e2, i, ox, oy, oz, dx, dy, dz, tmin, tmax)

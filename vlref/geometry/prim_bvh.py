@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .bvh import STACK, Bvh, _inverse, build_box_bvh, descend, pop_nearer, push_children, ray_box
+from .bvh import STACK, Bvh, _inverse, build_box_bvh, descend, next_leaf, pop_nearer, ray_box
 from .primitives import hit_primitive
 
 __all__ = ["PRIM_PAD", "PRIM_LEAF", "build_primitive_bvh", "prims_closest", "prims_occluded"]
@@ -94,12 +94,11 @@ def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row,
     stack = np.empty(STACK, dtype=np.int64)
     stack[0] = 0
     top = 1
-    while top > 0:
-        top -= 1
-        node = stack[top]
-        if node_count[node] == 0:
-            top = push_children(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top)
-            continue
+    while True:
+        node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
+                              stack, top)
+        if node < 0:
+            break
         first = node_first[node]
         for j in range(first, first + node_count[node]):
             k = order[j]
