@@ -4,7 +4,8 @@ The port renders ports/wgpu/scenes/pillars_point.toml (a spot and a point light,
 160x90 with real render passes on whatever WebGPU adapter exists (CI: Mesa lavapipe, a Vulkan driver on
 the CPU), exports its buffers as docs/PORTING.md says, ``vlref march`` runs the technique on them, and
 ``vlref compare`` must pass every pass of the faithful port with 0 failing pixels, fail every planted
-shader bug and pass both benign variants. The raster passes run once (module fixture); each variant
+shader bug and pass both benign variants (summation order under gpu-half; float32 light buffers under the
+float32 preset, which the faithful fp16 port fails). The raster passes run once (module fixture); each variant
 re-runs only the post passes (downsample .. composite) on the same buffers.
 """
 
@@ -42,15 +43,14 @@ def faithful(device, tmp_path_factory):
 def test_port_depth_matches_vlref_ray_cast_depth_off_silhouettes(faithful):
     """The port's rasterised, reversed-Z depth32float buffer decodes (by vlref) to vlref's own ray-cast depth,
     except where tessellated cylinders and spheres and their silhouettes differ from the analytic shapes."""
+    from vlref.io import read_image
     from vlref.render import prepare_frame
 
     port, _, marched, _ = faithful
-    from vlref.io import read_image
-
     got = read_image(marched / "depth.exr")[..., 0]
     want = prepare_frame(port.scene).gbuffer.depth
     both = np.isfinite(got) & np.isfinite(want)
-    assert np.array_equal(np.isfinite(got), np.isfinite(want)) or (np.isfinite(got) != np.isfinite(want)).mean() < 0.01
+    assert both.mean() > 0.5 and (np.isfinite(got) != np.isfinite(want)).mean() < 0.01
     rel = np.abs(got[both] - want[both]) / want[both]
     assert np.median(rel) < 1e-5          # the floor: float32 reversed-Z
     assert (rel < 1e-2).mean() > 0.97     # all but silhouettes of tessellated curved objects
@@ -81,10 +81,12 @@ def test_cli_compare_on_the_exported_final(faithful, tmp_path):
 def test_variant_is_judged_as_expected(faithful, variant):
     port, _, marched, _ = faithful
     spec = VARIANTS[variant]
-    report = kz_check.compare(marched / "final.exr", port.run(variant)["final"], "gpu-half")
+    report = kz_check.compare(marched / "final.exr", port.run(variant)["final"], spec.preset)
     frac, mean = kz_check.margins(report)
     if spec.expect == "pass":
-        assert report.passed and report.metrics["failing_pixels"] == 0, (variant, frac, mean)
+        assert report.passed, (variant, frac, mean)
+        if spec.preset != "float32":   # float32 allows knife-edge flips of discrete decisions (presets.toml)
+            assert report.metrics["failing_pixels"] == 0, (variant, frac, mean)
     else:
         assert not report.passed, (variant, frac, mean)
         assert max(frac, mean) > 1.3, (variant, frac, mean)   # fails by a margin, not on a knife edge

@@ -116,7 +116,7 @@ class KillzonePort:
         self.shadow = d.create_texture(size=(self.shadow_res, self.shadow_res, max(layer, 1)), format="depth32float",
                                        usage=rt)
         self.rt_usage = rt
-        self._render_scene()
+        self.render_scene()
 
     @staticmethod
     def _check_scene(scene):
@@ -191,7 +191,8 @@ class KillzonePort:
 
     # ----------------------------------------------------------------------------------- passes 1-3
 
-    def _render_scene(self):
+    def render_scene(self):
+        """Passes 1-3 (run by the constructor; again to time them warm)."""
         wgpu, d, cam = self.wgpu, self.device, self.cam
         W, H = cam.width, cam.height
         tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)

@@ -1,7 +1,8 @@
 """Switches of the WebGPU killzone port: the faithful port, planted shader bugs and benign variants.
 
 Each variant sets WGSL override constants (declared in ``shaders/*.wgsl``) and/or the light-buffer
-format; ``expect`` is what ``vlref compare`` must say against ``vlref march`` on the port's buffers.
+format; ``expect`` is what ``vlref compare --preset <preset>`` must say about its ``final`` against
+``vlref march`` on the port's buffers (fp16 targets: ``gpu-half``; float32 targets: ``float32``).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ class Variant:
     overrides: dict = field(default_factory=dict)
     light_format: str = "rgba16float"            # march / upsample / blur targets
     final_format: str = "rgba16float"
+    preset: str = "gpu-half"                     # the vlref compare preset this port configuration calls for
 
 
 VARIANTS = {
@@ -23,7 +25,7 @@ VARIANTS = {
     # benign: must pass
     "sum_order": Variant("upsample and blur sums in reversed tap order", "pass", {"BENIGN_REVERSED_SUM": 1}),
     "fp32": Variant("fp32 light buffers and final target instead of fp16", "pass", light_format="rgba32float",
-                    final_format="rgba32float"),
+                    final_format="rgba32float", preset="float32"),
     # planted bugs: must fail
     "steps_minus_one": Variant("march loop runs N - 1 samples, step still (b - a)/N", "fail",
                                {"BUG_STEPS_MINUS_ONE": 1}),
