@@ -35,16 +35,23 @@ buffers are fp16: ``gpu-half``. The min-depth downsample is exact up to float32 
 (sky pixels, ``inf`` in both, are left out with ``--ignore-sky ref``)."""
 
 
-def compare(ref_path: Path, test, preset: str, ignore_sky: bool = False):
+OWN_BUFFERS = {"max_fail_fraction": 1e-3}
+"""``--set`` for a comparison with ``vlref march`` on the port's own buffers at large sizes: no rasteriser
+silhouettes are left to absorb, so the failing-fraction allowance of ``gpu-half`` (2 %, sized for edges of
+64x36 frames) can shrink to ``float32``'s 0.1 % (docs/PORTING.md)."""
+
+
+def compare(ref_path: Path, test, preset: str, ignore_sky: bool = False, overrides=None):
     """``vlref compare`` of a vlref EXR with a port array (a report: passed, checks, metrics)."""
     from vlref.io import read_image
     from vlref.oracle.compare import build_mask, compare_arrays
+    from vlref.oracle.presets import tolerance
 
     ref = read_image(ref_path)
     test = np.asarray(test)
     test = test[..., None] if test.ndim == 2 else test
     mask = build_mask(ref, ignore_sky="ref") if ignore_sky else None
-    return compare_arrays(ref, test, preset, mask, flip=False)
+    return compare_arrays(ref, test, tolerance(preset, overrides), mask, flip=False)
 
 
 def margins(report) -> tuple[float, float]:
@@ -101,13 +108,16 @@ def main(argv=None) -> int:
         ok &= rep.passed
         print(f"| {p} | {r} | {preset} | {'PASS' if rep.passed else 'FAIL'} | "
               f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {f:.3f}x | {m:.3f}x |")
-    print("\n| variant | preset | expected | result (final) | failing fraction | mean error |\n|---|---|---|---|---|---|")
+    print("\n| variant | preset | expected | result (final) | failing fraction | mean error "
+          "| with `--set max_fail_fraction=1e-3` |\n|---|---|---|---|---|---|---|")
     for name, v in VARIANTS.items():
-        rep = compare(marched / "final.exr", port.run(name)["final"], v.preset)
+        final = port.run(name)["final"]
+        rep = compare(marched / "final.exr", final, v.preset)
+        tight = compare(marched / "final.exr", final, v.preset, overrides=OWN_BUFFERS)
         f, m = margins(rep)
         ok &= rep.passed == (v.expect == "pass")
         print(f"| `{name}`: {v.description} | {v.preset} | {v.expect} | {'PASS' if rep.passed else 'FAIL'} | "
-              f"{f:.3g}x | {m:.3g}x |")
+              f"{f:.3g}x | {m:.3g}x | {'PASS' if tight.passed else 'FAIL'} ({margins(tight)[0]:.3g}x) |")
     return 0 if ok else 1
 
 
