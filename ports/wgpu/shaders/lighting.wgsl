@@ -1,0 +1,29 @@
+// Pass 3: the lit scene colour (deferred): albedo (sum E max(0, n.l) V / pi + ambient); sky colour.
+@group(0) @binding(0) var<uniform> g: Globals;
+@group(0) @binding(1) var<storage, read> lights: array<Light>;
+@group(0) @binding(2) var shadow_tex: texture_depth_2d_array;
+@group(0) @binding(3) var depth_tex: texture_depth_2d;
+@group(0) @binding(4) var normal_tex: texture_2d<f32>;
+@group(0) @binding(5) var albedo_tex: texture_2d<f32>;
+
+@fragment
+fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
+    let px = vec2i(pos.xy);
+    let z = linear_depth(textureLoad(depth_tex, px, 0));
+    if (z >= SKY) {
+        return vec4f(g.sky.xyz, 1.0);
+    }
+    let d = pixel_ray(pos.xy, g.size.xy);
+    let n = textureLoad(normal_tex, px, 0).xyz;
+    let x = g.eye.xyz + d * (z / dot(d, g.fwd.xyz)) + 1e-3 * n;
+    var s = vec3f(0.0);
+    for (var k = 0u; k < arrayLength(&lights); k++) {
+        let inc = incidence(lights[k], x);
+        let cos_n = dot(n, inc.l);
+        if (cos_n > 0.0) {
+            s += inc.e * cos_n * shadow_visibility(lights[k], x);
+        }
+    }
+    let albedo = textureLoad(albedo_tex, px, 0).xyz;
+    return vec4f(albedo * (s / PI + g.ambient.xyz), 1.0);
+}

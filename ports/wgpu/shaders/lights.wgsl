@@ -1,0 +1,134 @@
+// Light incidence and shadow-map visibility (CONVENTIONS, vlref/lights/*.py docstrings), for shaders that
+// declare `lights` (storage array<Light>) and `shadow_tex` (texture_depth_2d_array).
+
+struct Light {
+    pos_kind: vec4f,        // position, kind (0 point, 1 spot)
+    dir_range: vec4f,       // direction of travel, range
+    color_strength: vec4f,  // colour * intensity, shadow strength
+    right_tan: vec4f,       // spot frame right, tan(spot_angle / 2)
+    up_bias: vec4f,         // spot frame up, shadow bias
+    cone: vec4f,            // cos outer, cos inner, half outer, half inner (radians)
+    law: vec4f,             // attenuation law, cone law, unity A, unity B
+    shadow: vec4f,          // first layer (-1: none), resolution, near, slope bias
+}
+
+override BUG_NO_RANGE_WINDOW: bool = false;   // windowed law without its (1 - (d/R)^4)^2 window
+override BUG_SHADOW_HALF_TEXEL: bool = false; // nearest texel taken at u*res - 0.5 (texel-centre mix-up)
+override BUG_CUBE_V_UP: bool = false;         // cube face v not flipped (GL-style t axis)
+
+struct Incidence { l: vec3f, e: vec3f }
+
+fn attenuation(li: Light, d2: f32) -> f32 {
+    let r = li.dir_range.w;
+    let u = d2 / (r * r);
+    if (u >= 1.0) {
+        return 0.0;
+    }
+    let law = i32(li.law.x);
+    if (law == 1) {   // unity (folk LUT): 1/(1 + 25u) * saturate(5 (1 - sqrt u))
+        return clamp(5.0 * (1.0 - sqrt(u)), 0.0, 1.0) / (1.0 + 25.0 * u);
+    }
+    let inv = 1.0 / max(d2, 1e-4);
+    if (law == 2 && !BUG_NO_RANGE_WINDOW) {   // windowed: saturate(1 - u^2)^2 / d^2
+        let w = 1.0 - u * u;
+        return w * w * inv;
+    }
+    return inv;
+}
+
+fn cone_falloff(li: Light, cos_t: f32) -> f32 {
+    if (cos_t <= li.cone.x) {
+        return 0.0;
+    }
+    let law = i32(li.law.y);
+    if (law == 0) {
+        let a = clamp(cos_t * li.law.z + li.law.w, 0.0, 1.0);
+        return a * a;
+    }
+    if (cos_t >= li.cone.y) {
+        return 1.0;
+    }
+    if (law == 1) {
+        return clamp((li.cone.z - acos(cos_t)) / (li.cone.z - li.cone.w), 0.0, 1.0);
+    }
+    let x = (cos_t - li.cone.x) / (li.cone.y - li.cone.x);
+    return x * x * (3.0 - 2.0 * x);
+}
+
+// E_l(x): colour * intensity * attenuation (* cone for spots); l the unit vector toward the light.
+fn incidence(li: Light, x: vec3f) -> Incidence {
+    let w = li.pos_kind.xyz - x;
+    let d2 = dot(w, w);
+    var e = attenuation(li, d2);
+    if (d2 == 0.0 || e == 0.0) {
+        return Incidence(vec3f(0.0), vec3f(0.0));
+    }
+    let l = w / sqrt(d2);
+    if (li.pos_kind.w == 1.0) {
+        e *= cone_falloff(li, -dot(l, li.dir_range.xyz));
+    }
+    return Incidence(l, e * li.color_strength.xyz);
+}
+
+// Cube faces (right, up) in the D3D order +X, -X, +Y, -Y, +Z, -Z.
+const CUBE_RIGHT = array<vec3f, 6>(vec3f(0, 0, -1), vec3f(0, 0, 1), vec3f(1, 0, 0), vec3f(1, 0, 0), vec3f(1, 0, 0), vec3f(-1, 0, 0));
+const CUBE_UP = array<vec3f, 6>(vec3f(0, 1, 0), vec3f(0, 1, 0), vec3f(0, 0, -1), vec3f(0, 0, 1), vec3f(0, 1, 0), vec3f(0, 1, 0));
+
+// Visibility of light `li` at x: ONE nearest texel (hard filter), its reversed-Z depth decoded to the
+// radial distance along the texel-centre ray; lit when |x - light| <= stored; strength applied.
+fn shadow_visibility(li: Light, x: vec3f) -> f32 {
+    let layer0 = i32(li.shadow.x);
+    if (layer0 < 0) {
+        return 1.0;
+    }
+    let res = li.shadow.y;
+    let w = x - li.pos_kind.xyz;
+    var layer = layer0;
+    var uv: vec2f;
+    var tan_h = 1.0;
+    if (li.pos_kind.w == 1.0) {
+        let zl = dot(w, li.dir_range.xyz);
+        if (!(zl > 0.0)) {
+            return 1.0;
+        }
+        let k = 0.5 / (zl * li.right_tan.w);
+        uv = vec2f(0.5 + dot(w, li.right_tan.xyz) * k, 0.5 - dot(w, li.up_bias.xyz) * k);
+        tan_h = li.right_tan.w;
+    } else {
+        let a = abs(w);
+        var f = 0;
+        var ma = a.x;
+        if (a.x >= a.y && a.x >= a.z) {
+            f = select(1, 0, w.x >= 0.0);
+        } else if (a.y >= a.z) {
+            f = select(3, 2, w.y >= 0.0);
+            ma = a.y;
+        } else {
+            f = select(5, 4, w.z >= 0.0);
+            ma = a.z;
+        }
+        if (ma == 0.0) {
+            return 1.0;
+        }
+        let sc = dot(w, CUBE_RIGHT[f]) / ma;
+        let tc = dot(w, CUBE_UP[f]) / ma;
+        uv = vec2f(0.5 + 0.5 * sc, select(0.5 - 0.5 * tc, 0.5 + 0.5 * tc, BUG_CUBE_V_UP));
+        layer = layer0 + f;
+    }
+    var st = uv * res;
+    if (BUG_SHADOW_HALF_TEXEL) {
+        st -= vec2f(0.5);
+    }
+    let texel = clamp(vec2i(floor(st)), vec2i(0), vec2i(i32(res) - 1));
+    let d = textureLoad(shadow_tex, texel, layer, 0);
+    if (d <= 0.0) {
+        return 1.0;
+    }
+    let n = li.shadow.z;
+    let fr = li.dir_range.w;
+    let z = fr * n / (d * (fr - n) + n);
+    let c = (2.0 * (vec2f(texel) + 0.5) / res - 1.0) * tan_h;
+    let stored = z * sqrt(1.0 + c.x * c.x + c.y * c.y);
+    let lit = select(0.0, 1.0, length(w) <= stored);
+    return 1.0 - li.color_strength.w * (1.0 - lit);
+}
