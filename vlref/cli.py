@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from . import __version__
+from .cluster import ItemsFailed, add_scheduler_argument
 from .errors import InputError
 
 # Buffers `vlref render` writes without --stages (EXR), besides final.png.
@@ -64,7 +65,11 @@ def cmd_reference(args) -> int:
     from .render import scene_hash
 
     scene = _load(args)
-    res = render_reference(scene, rel_tol=args.rel_tol)
+    if args.scheduler:
+        from .reference.tiles import render_reference_tiled
+        res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows)
+    else:
+        res = render_reference(scene, rel_tol=args.rel_tol)
     meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol)}
     with output_dir(args.output) as out:
         write_exr(out / "reference.exr", res.final, metadata=meta)
@@ -86,6 +91,16 @@ def cmd_bias(args) -> int:
     if args.output:
         with output_dir(args.output) as out:
             report.save(out)
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    from .sweep import load_sweep, run_sweep
+
+    spec = load_sweep(args.spec)
+    rows = run_sweep(spec, args.output, scheduler=args.scheduler, quiet=args.quiet)
+    if not args.quiet:
+        print(f"sweep: {len(rows)} items in {args.output}/summary.csv", file=sys.stderr)
     return 0
 
 
@@ -135,6 +150,9 @@ def build_parser() -> argparse.ArgumentParser:
     scene_args(ref, required=True)
     ref.add_argument("-o", "--output", default="out_reference")
     ref.add_argument("--rel-tol", type=float, default=1e-4, help="target relative error per pixel")
+    add_scheduler_argument(ref)
+    ref.add_argument("--tile-rows", type=int, default=16, metavar="N",
+                     help="with --scheduler: image rows per item (the result does not depend on it)")
     ref.set_defaults(func=cmd_reference)
 
     b = sub.add_parser("bias", help="a technique's error against the reference, and how it falls with steps")
@@ -143,6 +161,13 @@ def build_parser() -> argparse.ArgumentParser:
     b.add_argument("--steps", help="comma-separated step counts, e.g. 4,8,16,32")
     b.add_argument("-o", "--output", help="write the error images and report here")
     b.set_defaults(func=cmd_bias)
+
+    sw = sub.add_parser("sweep", help="a technique x parameter grid against the reference (error, time, FLIP)")
+    sw.add_argument("spec", help="sweep file (TOML): scene, set, techniques, metrics, [grid] or points")
+    sw.add_argument("-o", "--output", default="out_sweep", help="output folder (default: out_sweep)")
+    add_scheduler_argument(sw)
+    sw.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    sw.set_defaults(func=cmd_sweep)
 
     from .oracle.compare import add_arguments, run_compare
     c = sub.add_parser("compare", help="compare two images (exit 0 pass, 1 fail, 2 bad input)")
@@ -172,6 +197,9 @@ def main(argv: list[str] | None = None) -> int:
     except InputError as exc:
         print(f"vlref: error: {exc}", file=sys.stderr)
         return 2
+    except ItemsFailed as exc:
+        print(f"vlref: {exc}", file=sys.stderr)
+        return exc.exit_code
 
 
 if __name__ == "__main__":  # pragma: no cover

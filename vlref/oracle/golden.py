@@ -40,6 +40,7 @@ from typing import Sequence
 import numpy as np
 
 from .. import __version__
+from ..cluster import ItemsFailed, add_scheduler_argument
 from ..errors import InputError
 
 __all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
@@ -202,14 +203,17 @@ def read_manifest(golden_dir) -> dict:
 
 
 def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
-          log=print) -> dict:
+          log=print, scheduler: str | None = None, quiet: bool = False) -> dict:
     """Render the suite (or the ``only`` glob patterns of entry names) into ``golden_dir``; returns the manifest.
 
     With ``only``, the other entries of an existing manifest are kept. Files of entries no longer in the
-    suite are removed. All files are written atomically (:func:`vlref.io.output_dir`).
+    suite are removed. All files are written atomically (:func:`vlref.io.output_dir`). Entries are
+    independent items rendered on ``scheduler`` (:func:`vlref.cluster.run_items`); the files and the
+    manifest are the same bytes whatever the scheduler.
     """
     import numba
 
+    from ..cluster import Item, run_items
     from ..io import output_dir, write_exr, write_text
     from ..render import scene_hash, scene_settings_json
 
@@ -221,10 +225,11 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
     if only and (golden_dir / MANIFEST).exists():
         old = {e["name"]: e for e in read_manifest(golden_dir)["entries"]}
     records = {}
+    by_name = {entry.name: entry for entry in selected}
     with output_dir(golden_dir) as tmp:
-        for entry in selected:
-            start = time.perf_counter()
-            buffers, scene = render_entry(entry, suite.buffers)
+        def write(key, rendered, seconds):
+            entry = by_name[key]
+            buffers, scene = rendered
             record = {"name": entry.name, "scene": entry.scene, "technique": entry.technique,
                       "overrides": list(entry.overrides), "scene_hash": scene_hash(scene),
                       "settings": json.loads(scene_settings_json(scene)), "preset": suite.preset, "files": {}}
@@ -235,7 +240,10 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
                 write_exr(tmp / rel, array, metadata=meta)
                 record["files"][name] = {"path": rel, "sha256": _sha256(tmp / rel)}
             records[entry.name] = record
-            log(f"built {entry.name} ({time.perf_counter() - start:.2f} s)")
+            log(f"built {entry.name} ({seconds:.2f} s)")
+
+        run_items([Item(e.name, render_entry, (e, suite.buffers)) for e in selected], scheduler, write,
+                  desc="golden build", quiet=quiet)
         kept = [old[e.name] if e.name not in records else records[e.name] for e in entries
                 if e.name in records or e.name in old]
         manifest = {"format": FORMAT, "vlref_version": __version__, "numpy": np.__version__,
@@ -290,8 +298,14 @@ def _check_files(golden_dir: Path, record: dict) -> list[str]:
 
 
 def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
-           preset: str | None = None, log=print) -> list[Outcome]:
-    """Check checksums, staleness and re-renders of the goldens (module docstring); one outcome per entry."""
+           preset: str | None = None, log=print, scheduler: str | None = None,
+           quiet: bool = False) -> list[Outcome]:
+    """Check checksums, staleness and re-renders of the goldens (module docstring); one outcome per entry.
+
+    The re-renders are independent items run on ``scheduler`` (:func:`vlref.cluster.run_items`) and
+    compared here as they arrive; the outcomes are in entry-name order whatever the scheduler.
+    """
+    from ..cluster import Item, run_items
     from ..io import read_image
     from ..render import scene_hash, scene_settings_json
     from .compare import compare_arrays
@@ -312,35 +326,46 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
             outcomes.append(Outcome(name, ["in the manifest but no longer in the suite (rebuild)"], {}))
     for o in outcomes:
         log(f"FAILED {o.name}: {o.problems[0]}")
+    checked: dict[str, Outcome] = {}
+
+    def report(name, problems, margins, seconds):
+        checked[name] = Outcome(name, problems, margins)
+        state = "ok" if not problems else "FAILED"
+        log(f"{state:6s} {name} ({seconds:.2f} s)" + "".join(f"\n       {p}" for p in problems))
+
+    def compare(name, rendered, seconds):
+        record = recorded[name]
+        buffers, scene = rendered
+        problems, margins = [], {}
+        if scene_hash(scene) != record.get("scene_hash"):
+            keys = _changed_keys(record.get("settings"), json.loads(scene_settings_json(scene)))
+            problems.append(f"the scene changed since the build (scene_hash differs: {', '.join(keys[:5])}"
+                            f"{' ...' if len(keys) > 5 else ''}); rebuild deliberately")
+        tol = preset or record.get("preset", suite.preset)
+        for buf, array in buffers.items():
+            ref = read_image(golden_dir / record["files"][buf]["path"])
+            test = np.asarray(array, dtype=np.float64)
+            mask = np.isfinite(ref).all(axis=2)
+            result = compare_arrays(ref, test, tol, mask, flip=False,
+                                    names=(str(golden_dir / record["files"][buf]["path"]), f"{name} {buf}"))
+            frac, bound = result.metrics["frac_failing"], result.tolerance.max_fail_fraction
+            margins[buf] = (frac, bound, result.metrics["max_abs"])
+            if not result.passed:
+                problems.append(f"{buf}: differs beyond preset {tol}: " + result.summary().replace("\n", "; "))
+        report(name, problems, margins, seconds)
+
+    items = []
     for name in sorted(expected.keys() & recorded.keys()):
         record, entry = recorded[name], expected[name]
-        start = time.perf_counter()
         problems = _check_files(golden_dir, record)
-        margins = {}
         if list(entry.overrides) != record.get("overrides"):
             problems.append(f"overrides changed: manifest {record.get('overrides')} vs suite {list(entry.overrides)}")
-        if not problems:
-            buffers, scene = render_entry(entry, list(record["files"]))
-            if scene_hash(scene) != record.get("scene_hash"):
-                keys = _changed_keys(record.get("settings"), json.loads(scene_settings_json(scene)))
-                problems.append(f"the scene changed since the build (scene_hash differs: {', '.join(keys[:5])}"
-                                f"{' ...' if len(keys) > 5 else ''}); rebuild deliberately")
-            tol = preset or record.get("preset", suite.preset)
-            for buf, array in buffers.items():
-                ref = read_image(golden_dir / record["files"][buf]["path"])
-                test = np.asarray(array, dtype=np.float64)
-                mask = np.isfinite(ref).all(axis=2)
-                report = compare_arrays(ref, test, tol, mask, flip=False,
-                                        names=(str(golden_dir / record["files"][buf]["path"]), f"{name} {buf}"))
-                frac, bound = report.metrics["frac_failing"], report.tolerance.max_fail_fraction
-                margins[buf] = (frac, bound, report.metrics["max_abs"])
-                if not report.passed:
-                    problems.append(f"{buf}: differs beyond preset {tol}: " + report.summary().replace("\n", "; "))
-        outcomes.append(Outcome(name, problems, margins))
-        state = "ok" if not problems else "FAILED"
-        log(f"{state:6s} {name} ({time.perf_counter() - start:.2f} s)" +
-            "".join(f"\n       {p}" for p in problems))
-    return outcomes
+        if problems:
+            report(name, problems, {}, 0.0)
+        else:
+            items.append(Item(name, render_entry, (entry, list(record["files"]))))
+    run_items(items, scheduler, compare, desc="golden verify", quiet=quiet)
+    return outcomes + [checked[name] for name in sorted(checked)]
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -353,6 +378,7 @@ def _parser() -> argparse.ArgumentParser:
                    help="entries whose name (scene/technique) matches, e.g. 'pillars/*' (repeatable)")
     p.add_argument("--preset", help="verify: tolerance preset instead of the manifest's")
     p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
+    add_scheduler_argument(p)
     return p
 
 
@@ -370,15 +396,18 @@ def main_golden(argv: Sequence[str]) -> int:
                 print(f"{e.name:32s} {' '.join(e.overrides)}")
             return 0
         if args.action == "build":
-            manifest = build(args.dir, args.suite, args.only, log)
+            manifest = build(args.dir, args.suite, args.only, log, args.scheduler, args.quiet)
             size = sum(p.stat().st_size for p in Path(args.dir).rglob("*") if p.is_file())
             print(f"golden build: {len(manifest['entries'])} entries, {size / 1e6:.2f} MB in {args.dir} "
                   f"({time.perf_counter() - start:.1f} s)")
             return 0
-        outcomes = verify(args.dir, args.suite, args.only, args.preset, log)
+        outcomes = verify(args.dir, args.suite, args.only, args.preset, log, args.scheduler, args.quiet)
     except InputError as exc:
         print(f"vlref golden: error: {exc}", file=sys.stderr)
         return 2
+    except ItemsFailed as exc:
+        print(f"vlref golden: {exc}", file=sys.stderr)
+        return exc.exit_code
     failed = [o for o in outcomes if o.problems]
     print(f"golden verify: {len(outcomes) - len(failed)} of {len(outcomes)} passed "
           f"({time.perf_counter() - start:.1f} s)" + (f"; FAILED: {', '.join(o.name for o in failed)}" if failed else ""))

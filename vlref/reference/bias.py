@@ -30,7 +30,7 @@ import numpy as np
 
 from .quadrature import ReferenceResult, render_reference
 
-__all__ = ["BiasReport", "technique_bias", "edge_mask", "error_concentration", "loglog_slope"]
+__all__ = ["BiasReport", "technique_bias", "inscatter_error", "edge_mask", "error_concentration", "loglog_slope"]
 
 
 @dataclass
@@ -123,6 +123,16 @@ def loglog_slope(steps, errors) -> float:
     return float(np.polyfit(np.log(s), np.log(e), 1)[0])
 
 
+def inscatter_error(inscatter: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, dict]:
+    """Per-pixel ``e = max_c |L_c - R_c|`` (H, W) and ``mean_abs, max_abs, mean_rel, max_rel`` (module docstring)."""
+    r_max = reference.max(axis=-1)
+    signal = float(r_max.sum())
+    e = np.abs(np.asarray(inscatter, dtype=np.float64) - reference).max(axis=-1)
+    return e, {"mean_abs": float(e.mean()), "max_abs": float(e.max()),
+               "mean_rel": float(e.sum()) / signal if signal > 0 else 0.0,
+               "max_rel": float(e.max() / r_max.max()) if r_max.max() > 0 else 0.0}
+
+
 def technique_bias(scene, technique: str, steps_list=(4, 8, 16, 32, 64), reference: ReferenceResult | None = None,
                    rel_tol: float = 1e-4) -> BiasReport:
     """Bias of ``technique`` on ``scene`` against the reference (module docstring).
@@ -132,16 +142,12 @@ def technique_bias(scene, technique: str, steps_list=(4, 8, 16, 32, 64), referen
     from ..render import render
 
     ref = reference if reference is not None else render_reference(scene, rel_tol=rel_tol)
-    r_max = ref.inscatter.max(axis=-1)
-    signal = float(r_max.sum())
     rows, first, depth = [], None, None
     for steps in steps_list:
         s = scene.replace(render=dataclasses.replace(scene.render, technique=technique, steps=int(steps)))
         res = render(s)
-        e = np.abs(np.asarray(res.buffers["inscatter"], dtype=np.float64) - ref.inscatter).max(axis=-1)
-        rows.append({"steps": int(steps), "mean_abs": float(e.mean()), "max_abs": float(e.max()),
-                     "mean_rel": float(e.sum()) / signal if signal > 0 else 0.0,
-                     "max_rel": float(e.max() / r_max.max()) if r_max.max() > 0 else 0.0})
+        e, row = inscatter_error(res.buffers["inscatter"], ref.inscatter)
+        rows.append({"steps": int(steps), **row})
         if first is None:
             first, depth = e, res.buffers["depth"]
     usable = [r for r in rows if r["mean_abs"] > 10.0 * ref.max_error]

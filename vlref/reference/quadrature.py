@@ -249,21 +249,25 @@ class ReferenceResult:
 
 
 def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_TOL, progress=None,
-                     shadow_samples: int = 512, max_intervals: int = 4000) -> ReferenceResult:
+                     shadow_samples: int = 512, max_intervals: int = 4000,
+                     rows: tuple[int, int] | None = None) -> ReferenceResult:
     """Solve the single-scattering integral of every pixel of ``scene`` (see the module docstring).
 
     ``rel_tol``: target error relative to the pixel's brightest inscatter channel;
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
     ``progress``: optional callable receiving stage names; ``shadow_samples``: visibility grid
-    size per light and pixel; ``max_intervals``: adaptive budget per pixel.
+    size per light and pixel; ``max_intervals``: adaptive budget per pixel; ``rows``: only the image
+    rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
+    image bit for bit; :mod:`vlref.reference.tiles`).
     """
     from ..render import prepare_frame
 
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
     cam = frame.camera
-    dirs = cam.ray_directions()
-    surface = cam.eye_depth_to_distance(frame.gbuffer.depth, dirs)
+    y0, y1 = rows if rows is not None else (0, scene.render.height)
+    dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])
+    surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
     t_end = np.minimum(surface, scene.render.max_distance)
     ctx = ig.build_context(scene, frame)
     inscatter, trans, err, used, ok, edges = _reference_kernel(
@@ -271,7 +275,7 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
         int(shadow_samples), int(max_intervals), ig.max_split_points(ctx, shadow_samples))
     if progress is not None:
         progress("reference")
-    final = trans[..., None] * frame.scene_colour + inscatter
+    final = trans[..., None] * frame.scene_colour[y0:y1] + inscatter
     stats = {"intervals": int(used.sum()), "unconverged": int((~ok).sum()), "rel_tol": rel_tol,
              "abs_tol": abs_tol, "shadow_samples": shadow_samples, "seconds": time.perf_counter() - start,
              "shadow_boundaries": edges}
