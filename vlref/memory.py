@@ -5,8 +5,8 @@
 * frame buffers: ``width * height * B_t`` bytes, ``B_t`` the peak bytes per pixel of technique ``t``
   (G-buffer, ray directions, scene colour, the technique's pass buffers, the outputs, float64);
 * shadow maps: every shadowed light's faces (spot 1, point 6, directional ``cascades``) of
-  ``resolution^2`` texels at ``SHADOW_BYTES_PER_TEXEL`` each (the float32 map, its float32 transparent
-  layer), plus ``SHADOW_CAST_BYTES_PER_TEXEL`` for the largest face (the texel rays being cast);
+  ``resolution^2`` texels at ``SHADOW_BYTES_PER_TEXEL[type]`` each (the float32 map and, while it is cast,
+  the texels' ray origins, directions and distances in float64);
 * ``PROCESS_BYTES``: the interpreter, NumPy, Numba and the compiled kernels.
 
 ``B_t`` and the per-texel sizes are tracemalloc peaks of ``render(scene, stages=True)`` on the bundled
@@ -25,8 +25,8 @@ __all__ = ["MemoryEstimate", "estimate", "available_bytes", "check_memory"]
 
 BYTES_PER_PIXEL = {"physical": 240, "killzone": 360, "slightlymad": 300, "urp": 340, "radial": 300}
 """Peak bytes per frame pixel of each technique (measured 228, 352, 294, 333, 292)."""
-SHADOW_BYTES_PER_TEXEL = 64
-SHADOW_CAST_BYTES_PER_TEXEL = 64
+SHADOW_BYTES_PER_TEXEL = {"spot": 128, "point": 75, "directional": 60}
+"""Peak bytes per shadow-map texel by light type (measured 128, 74.7, 58.7 at 512^2)."""
 PROCESS_BYTES = 300e6
 GB = 1e9
 
@@ -55,33 +55,52 @@ def estimate(scene) -> MemoryEstimate:
     r = scene.render
     per_pixel = BYTES_PER_PIXEL.get(r.technique, max(BYTES_PER_PIXEL.values()))
     frame = float(r.width) * r.height * per_pixel
-    maps = [(i, _faces(l) * l.shadows.resolution ** 2) for i, l in enumerate(scene.lights)
-            if l.shadows is not None and l.shadows.enabled]
-    face = max((l.shadows.resolution ** 2 for l in scene.lights if l.shadows is not None and l.shadows.enabled),
-               default=0)
-    shadows = float(sum(t for _, t in maps)) * SHADOW_BYTES_PER_TEXEL + float(face) * SHADOW_CAST_BYTES_PER_TEXEL
+    maps = [(i, float(_faces(l)) * l.shadows.resolution ** 2 * SHADOW_BYTES_PER_TEXEL[l.type])
+            for i, l in enumerate(scene.lights) if l.shadows is not None and l.shadows.enabled]
+    shadows = sum(b for _, b in maps)
     largest = "render.width"
     if maps:
-        i, texels = max(maps, key=lambda m: m[1])
-        if texels * SHADOW_BYTES_PER_TEXEL > frame:
+        i, size = max(maps, key=lambda m: m[1])
+        if size > frame:
             largest = f"lights[{i}].shadows.resolution"
     return MemoryEstimate(frame, shadows, PROCESS_BYTES, largest)
 
 
+def _read_number(path: str) -> float | None:
+    try:
+        with open(path, encoding="ascii") as fh:
+            text = fh.read().split()[0]
+        return None if text == "max" else float(text)
+    except (OSError, ValueError, IndexError):
+        return None
+
+
 def available_bytes() -> float | None:
-    """Memory available to a new allocation: ``MemAvailable`` of ``/proc/meminfo`` (Linux), else the free
-    physical pages (``sysconf``), else None (unknown: no check)."""
+    """Memory a new allocation can get: the smallest of ``MemAvailable`` (``/proc/meminfo``; elsewhere the
+    free physical pages of ``sysconf``), the cgroup v2 headroom ``memory.max - memory.current`` and the
+    address-space limit ``RLIMIT_AS`` (``ulimit -v``); None when none is known (no check)."""
+    limits = []
     try:
         with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
+            limits += [float(line.split()[1]) * 1024.0 for line in fh if line.startswith("MemAvailable:")]
     except OSError:
         pass
+    if not limits:
+        try:
+            limits.append(float(os.sysconf("SC_AVPHYS_PAGES")) * float(os.sysconf("SC_PAGE_SIZE")))
+        except (AttributeError, OSError, ValueError):
+            pass
+    cg_max, cg_now = _read_number("/sys/fs/cgroup/memory.max"), _read_number("/sys/fs/cgroup/memory.current")
+    if cg_max is not None and cg_now is not None:
+        limits.append(max(cg_max - cg_now, 0.0))
     try:
-        return float(os.sysconf("SC_AVPHYS_PAGES")) * float(os.sysconf("SC_PAGE_SIZE"))
-    except (AttributeError, OSError, ValueError):
-        return None
+        import resource
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY:
+            limits.append(float(soft))
+    except (ImportError, OSError, ValueError):
+        pass
+    return min(limits) if limits else None
 
 
 def check_memory(scene, available: float | None = None) -> MemoryEstimate:
