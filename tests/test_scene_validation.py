@@ -97,7 +97,7 @@ def test_overrides_reach_any_field(tmp_path):
 @pytest.mark.parametrize("override, path", [
     ("lights.3.range=2", "lights[3]"),
     ("render.width", "--set render.width"),
-    ("render.width=-3", "render.width"),
+    ("render.width=-3", "--set render.width=-3"),
 ])
 def test_bad_overrides_are_reported(tmp_path, override, path):
     _, msg = error_of(tmp_path, MINIMAL, [override])

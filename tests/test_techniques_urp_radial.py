@@ -119,3 +119,19 @@ def test_disenone_variant_defaults(radial_scene):
     # radiate peaks at 0.5; 31 taps each weighted 1/1024 add at most 31/1024 * 0.5
     assert out["light_image"].max() <= 0.5
     assert out["radial"].max() <= 0.5 * (1 + 31 / 1024) + 1e-12
+
+
+def test_gpugems_light_disc_is_antialiased_ldr_and_has_the_disc_area():
+    """The occlusion pre-pass is an LDR target (values <= 1) and the disc's rim is anti-aliased: its
+    coverage sums to the disc's area pi R^2 and some rim pixels are partly covered (a hard test would
+    make a staircase rim, which the radial loop magnifies by 1 / (1 - Density))."""
+    for radius, uv in ((7.3, (0.41, 0.57)), (12.0, (0.5, 0.5))):
+        cov = radial.disc_coverage(96, 64, uv, radius)
+        assert cov.min() >= 0.0 and cov.max() <= 1.0
+        assert cov.sum() == pytest.approx(np.pi * radius ** 2, rel=0.01)
+        rim = (cov > 0.0) & (cov < 1.0)
+        assert rim.sum() >= 2 * np.pi * radius * 0.8
+    scene = load_scene("pillars", ["render.width=64", "render.height=36", 'render.technique="radial"',
+                                   "lights.0.shadows.resolution=64"])
+    out = radial.render(scene, prepare_frame(scene))
+    assert 0.0 < out["light_image"].max() <= 1.0

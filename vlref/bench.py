@@ -507,17 +507,31 @@ def format_report(r: dict) -> str:
     return "\n".join(lines)
 
 
+def bench_parser() -> argparse.ArgumentParser:
+    """The options of ``vlref bench``."""
+    p = argparse.ArgumentParser(prog="vlref bench", description="benchmarks (see vlref.bench)")
+    p.add_argument("--quick", action="store_true", help="tiny sizes, one repeat (CI smoke run; default: full sizes)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON (default: a text table)")
+    p.add_argument("-o", "--output", help="also write the JSON report to this file (default: print only)")
+    p.add_argument("--repeats", type=int, help="timed runs per figure (median); default 3, 1 with --quick")
+    return p
+
+
 def main_bench(argv: list[str]) -> int:
     """``vlref bench [--quick] [--json] [-o FILE]``; returns 0 (benchmarks never fail on a timing)."""
-    p = argparse.ArgumentParser(prog="vlref bench", description="benchmarks (see vlref.bench)")
-    p.add_argument("--quick", action="store_true", help="tiny sizes, one repeat (CI smoke run)")
-    p.add_argument("--json", action="store_true", help="print the report as JSON")
-    p.add_argument("-o", "--output", help="also write the JSON report to this file")
-    p.add_argument("--repeats", type=int, help="timed runs per figure (median); default 3, 1 with --quick")
+    p = bench_parser()
     try:
         args = p.parse_args(argv)
     except SystemExit as exc:
         return int(exc.code or 0)
+    if args.output:
+        from .errors import InputError
+        from .io import check_output_file
+        try:
+            check_output_file(args.output)
+        except InputError as exc:
+            print(f"vlref bench: error: {exc}", file=sys.stderr)
+            return 2
     cfg = QUICK if args.quick else FULL
     if args.repeats:
         cfg = dataclasses.replace(cfg, repeats=max(1, args.repeats))

@@ -27,11 +27,37 @@ def _progress(quiet: bool, total: int, desc: str):
 
 
 def _load(args):
+    """The scene of ``args`` with its overrides; the output folder and the memory estimate are checked
+    first (before any work), unless ``--ignore-memory-check``."""
+    from .io import check_output_dir
+    from .memory import check_memory
     from .scene import load_scene
+
+    if getattr(args, "output", None):
+        check_output_dir(args.output)
     overrides = list(args.set or [])
     if getattr(args, "technique", None):
         overrides.append(f'render.technique="{args.technique}"')
-    return load_scene(args.scene, overrides)
+    scene = load_scene(args.scene, overrides)
+    if not args.ignore_memory_check:
+        check_memory(scene)
+    return scene
+
+
+def _preview_exposure(scene, image) -> tuple[float, dict[str, str], str]:
+    """The PNG preview's exposure ``render.exposure x 1/p``, ``p`` the ``render.auto_exposure`` percentile of
+    ``image``'s luminance (``render.exposure`` alone when that is 0); its PNG tEXt and a summary phrase."""
+    from .io import luminance, percentile_exposure
+
+    r = scene.render
+    if r.auto_exposure <= 0.0:
+        rule = f"render.exposure {r.exposure:g}"
+        return r.exposure, {"vlref_exposure_rule": rule}, f"preview exposure {r.exposure:.4g}"
+    auto, level = percentile_exposure(luminance(image), r.auto_exposure)
+    exposure = r.exposure * auto
+    rule = (f"render.exposure {r.exposure:g} / luminance {level:.6g} at percentile {r.auto_exposure:g} of the "
+            "image (render.auto_exposure; 0 = off)")
+    return exposure, {"vlref_exposure_rule": rule}, f"preview exposure {exposure:.4g} = 1/p{r.auto_exposure:g} luminance"
 
 
 def cmd_render(args) -> int:
@@ -41,14 +67,17 @@ def cmd_render(args) -> int:
     scene = _load(args)
     bar = _progress(args.quiet, 5, f"render {Path(scene.source).stem}")
     result = render(scene, stages=args.stages, progress=(lambda name: bar.update(1)) if bar else None)
+    exposure, png_meta, phrase = _preview_exposure(scene, result.buffers["final"])
     with output_dir(args.output) as out:
-        save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=scene.render.exposure)
+        save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
     if bar:
         bar.close()
     if not args.quiet:
+        for note in result.notes:
+            print(f"vlref: note: {note}", file=sys.stderr)
         total = sum(result.timings.values())
         print(f"wrote {args.output} ({scene.render.width}x{scene.render.height}, "
-              f"{scene.render.technique}, {total:.2f} s)", file=sys.stderr)
+              f"{scene.render.technique}, {total:.2f} s; {phrase})", file=sys.stderr)
     return 0
 
 
@@ -71,12 +100,13 @@ def cmd_reference(args) -> int:
     else:
         res = render_reference(scene, rel_tol=args.rel_tol)
     meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol)}
+    exposure, png_meta, phrase = _preview_exposure(scene, res.final)
     with output_dir(args.output) as out:
         write_exr(out / "reference.exr", res.final, metadata=meta)
         write_exr(out / "inscatter.exr", res.inscatter, metadata=meta)
         write_exr(out / "error.exr", res.error, metadata=meta)
-        write_png(out / "reference.png", res.final, exposure=scene.render.exposure)
-    print(f"largest error estimate: {res.max_error:.3e} (target relative {args.rel_tol:g})")
+        write_png(out / "reference.png", res.final, exposure=exposure, text=png_meta)
+    print(f"largest error estimate: {res.max_error:.3e} (target relative {args.rel_tol:g}; {phrase})")
     return 0
 
 
@@ -95,8 +125,10 @@ def cmd_bias(args) -> int:
 
 
 def cmd_sweep(args) -> int:
+    from .io import check_output_dir
     from .sweep import load_sweep, run_sweep
 
+    check_output_dir(args.output)
     spec = load_sweep(args.spec)
     rows = run_sweep(spec, args.output, scheduler=args.scheduler, quiet=args.quiet)
     if not args.quiet:
@@ -126,21 +158,30 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"vlref {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
+    from .scene.model import TECHNIQUES
+    techniques = ", ".join(TECHNIQUES)
+
     def scene_args(sp, required=False):
         if required:
-            sp.add_argument("scene", help="scene file (TOML/JSON) or bundled scene name")
+            sp.add_argument("scene", help="scene file (TOML/JSON) or bundled scene name (see `vlref scenes`)")
         else:
             sp.add_argument("scene", nargs="?", default=None,
                             help="scene file (TOML/JSON) or bundled scene name (default: the bundled default)")
         sp.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
-                        help="override any scene field, e.g. render.width=320 or lights.0.intensity=20")
+                        help="override any scene field, e.g. render.width=320 or lights.0.intensity=20 "
+                             "(repeatable; default: none)")
+        sp.add_argument("--ignore-memory-check", action="store_true",
+                        help="render even when the estimated peak memory exceeds the available memory "
+                             "(default: refuse, exit 2)")
 
     r = sub.add_parser("render", help="render a scene")
     scene_args(r)
     r.add_argument("-o", "--output", default="out", help="output folder (default: out)")
-    r.add_argument("--technique", help="shortcut for --set render.technique=NAME")
-    r.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map")
-    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    r.add_argument("--technique", metavar="NAME",
+                   help=f"technique ({techniques}); shortcut for --set render.technique=NAME "
+                        "(default: the scene's render.technique, physical when unset)")
+    r.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map (default: off)")
+    r.add_argument("-q", "--quiet", action="store_true", help="no progress bar, notes or summary (default: off)")
     r.set_defaults(func=cmd_render)
 
     s = sub.add_parser("scenes", help="list the bundled scenes")
@@ -148,18 +189,21 @@ def build_parser() -> argparse.ArgumentParser:
 
     ref = sub.add_parser("reference", help="converged single-scattering reference with per-pixel error")
     scene_args(ref, required=True)
-    ref.add_argument("-o", "--output", default="out_reference")
-    ref.add_argument("--rel-tol", type=float, default=1e-4, help="target relative error per pixel")
+    ref.add_argument("-o", "--output", default="out_reference",
+                     help="output folder for reference.exr/.png, inscatter.exr, error.exr (default: out_reference)")
+    ref.add_argument("--rel-tol", type=float, default=1e-4,
+                     help="target relative error per pixel (default: 1e-4)")
     add_scheduler_argument(ref)
     ref.add_argument("--tile-rows", type=int, default=16, metavar="N",
-                     help="with --scheduler: image rows per item (the result does not depend on it)")
+                     help="with --scheduler: image rows per item; the result does not depend on it (default: 16)")
     ref.set_defaults(func=cmd_reference)
 
     b = sub.add_parser("bias", help="a technique's error against the reference, and how it falls with steps")
     scene_args(b, required=True)
-    b.add_argument("--technique", required=True)
-    b.add_argument("--steps", help="comma-separated step counts, e.g. 4,8,16,32")
-    b.add_argument("-o", "--output", help="write the error images and report here")
+    b.add_argument("--technique", required=True, metavar="NAME",
+                   help=f"the technique to measure ({techniques}); required, no default")
+    b.add_argument("--steps", help="comma-separated step counts, e.g. 4,8,16,32 (default: 4,8,16,32,64)")
+    b.add_argument("-o", "--output", help="write the error images and report here (default: print only)")
     b.set_defaults(func=cmd_bias)
 
     sw = sub.add_parser("sweep", help="a technique x parameter grid against the reference (error, time, FLIP)")

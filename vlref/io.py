@@ -11,6 +11,7 @@ Conventions
   non-string values (settings dicts) are stored as canonical JSON (sorted keys).
 * PNG files are previews only, never compared: ``value * exposure`` -> ACES filmic fit (Narkowicz 2015,
   ``x(2.51x+0.03) / (x(2.43x+0.59)+0.14)``) clamped to [0, 1] -> sRGB OETF (IEC 61966-2-1) -> 8 bit.
+  The exposure may come from a percentile (:func:`percentile_exposure`); PNG ``tEXt`` chunks record it.
 * Every write is atomic: the bytes go to a temporary file in the destination folder, are fsync'ed,
   then ``os.replace`` moves them into place; on any failure the temporary file is removed and no
   partial file remains. :func:`output_dir` extends this to a set of files (all or nothing).
@@ -37,7 +38,8 @@ from .errors import InputError
 
 __all__ = [
     "write_exr", "read_exr", "read_image", "write_png", "write_npy", "write_npz", "save_buffers",
-    "save_render", "output_dir", "srgb8", "png_bytes", "default_channel_names", "write_bytes", "write_text",
+    "save_render", "output_dir", "check_output_dir", "check_output_file", "srgb8", "png_bytes", "png_text",
+    "percentile_exposure", "luminance", "default_channel_names", "write_bytes", "write_text",
 ]
 
 # Attributes every EXR header carries; user metadata may not reuse these names.
@@ -88,6 +90,39 @@ def _atomic_write(path: str | os.PathLike, write: Callable[[BinaryIO], None]) ->
     return path
 
 
+def check_output_dir(path: str | os.PathLike, key: str = "output") -> Path:
+    """Check, before any work, that ``path`` can become an output folder; returns its nearest existing ancestor.
+
+    :class:`InputError` ``("<command line>", key, reason)`` when ``path`` (or an ancestor) exists and is not
+    a folder, or when the folder that would hold the new files is not writable.
+    """
+    final = Path(path)
+    if final.exists() and not final.is_dir():
+        raise InputError("<command line>", key, f"{final} exists and is not a folder")
+    anchor = final.absolute().parent
+    while not anchor.exists():
+        anchor = anchor.parent
+    if not anchor.is_dir():
+        raise InputError("<command line>", key, f"{anchor} is a file, not a folder: cannot create {final}")
+    for folder in {anchor, final} if final.is_dir() else {anchor}:
+        if not os.access(folder, os.W_OK | os.X_OK):
+            raise InputError("<command line>", key, f"{folder} is not writable")
+    return anchor
+
+
+def check_output_file(path: str | os.PathLike, key: str = "output") -> None:
+    """Check, before any work, that the file ``path`` can be written: not a folder, its folder exists and is
+    writable; :class:`InputError` ``("<command line>", key, reason)`` otherwise."""
+    target = Path(path)
+    if target.is_dir():
+        raise InputError("<command line>", key, f"{target} is a folder, not a file")
+    folder = target.absolute().parent
+    if not folder.is_dir():
+        raise InputError("<command line>", key, f"folder {folder} does not exist")
+    if not os.access(folder, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
+        raise InputError("<command line>", key, f"{target} is not writable")
+
+
 @contextlib.contextmanager
 def output_dir(path: str | os.PathLike) -> Iterator[Path]:
     """Write a set of files all or nothing: yields a temporary folder, moved into ``path`` on success.
@@ -99,11 +134,7 @@ def output_dir(path: str | os.PathLike) -> Iterator[Path]:
     folder is deleted and ``path`` is left exactly as it was (not even created).
     """
     final = Path(path)
-    if final.exists() and not final.is_dir():
-        raise InputError("<command line>", "output", f"{final} exists and is not a folder")
-    anchor = final.absolute().parent
-    while not anchor.exists():
-        anchor = anchor.parent
+    anchor = check_output_dir(final)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".partial", dir=anchor))
     try:
         yield tmp
@@ -373,15 +404,62 @@ def srgb8(image: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     return np.round(np.clip(s, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def png_bytes(rgb8: np.ndarray) -> bytes:
-    """Encode an ``(H, W, 3)`` uint8 image as PNG bytes (imageio)."""
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+"""Rec. 709 / sRGB luminance weights of linear RGB."""
+
+
+def luminance(image: np.ndarray) -> np.ndarray:
+    """Rec. 709 luminance ``0.2126 R + 0.7152 G + 0.0722 B`` of ``(H, W, 3)``; ``(H, W)``/(H, W, 1) pass through."""
+    a = np.asarray(image, dtype=np.float64)
+    if a.ndim == 3 and a.shape[2] == 1:
+        return a[:, :, 0]
+    return a @ np.asarray(LUMINANCE) if a.ndim == 3 else a
+
+
+def percentile_exposure(values: np.ndarray, percentile: float = 99.0) -> tuple[float, float]:
+    """``(1 / level, level)``, ``level`` the ``percentile`` of the finite ``values``: the exposure that maps that
+    level to 1 before the tone map (where the ACES fit gives 0.80, sRGB code 231). ``(1, level)`` when the
+    level is not positive (a black image)."""
+    v = np.asarray(values, dtype=np.float64)
+    v = v[np.isfinite(v)]
+    level = float(np.percentile(v, percentile)) if v.size else 0.0
+    return (1.0 / level if level > 0.0 else 1.0), level
+
+
+def png_text(data: bytes) -> dict[str, str]:
+    """The ``tEXt`` chunks of PNG ``data`` as ``{keyword: text}`` (Latin-1)."""
+    out, pos = {}, 8
+    while pos + 8 <= len(data):
+        length = int.from_bytes(data[pos:pos + 4], "big")
+        kind = data[pos + 4:pos + 8]
+        if kind == b"tEXt":
+            key, _, text = data[pos + 8:pos + 8 + length].partition(b"\0")
+            out[key.decode("latin-1")] = text.decode("latin-1")
+        pos += 12 + length
+    return out
+
+
+def png_bytes(rgb8: np.ndarray, text: Mapping[str, str] | None = None) -> bytes:
+    """Encode an ``(H, W, 3)`` uint8 image as PNG bytes (imageio), with ``text`` as ``tEXt`` chunks after IHDR."""
+    import zlib
+
     import imageio.v3 as iio
-    return iio.imwrite("<bytes>", np.ascontiguousarray(rgb8, dtype=np.uint8), extension=".png")
+    data = iio.imwrite("<bytes>", np.ascontiguousarray(rgb8, dtype=np.uint8), extension=".png")
+    if not text:
+        return data
+    chunks = b""
+    for key, value in text.items():
+        body = b"tEXt" + key.encode("latin-1") + b"\0" + str(value).encode("latin-1", "replace")
+        chunks += (len(body) - 4).to_bytes(4, "big") + body + zlib.crc32(body).to_bytes(4, "big")
+    ihdr_end = 8 + 12 + int.from_bytes(data[8:12], "big")
+    return data[:ihdr_end] + chunks + data[ihdr_end:]
 
 
-def write_png(path, rgb: np.ndarray, exposure: float = 1.0) -> Path:
-    """Write a tone-mapped sRGB 8-bit preview PNG (see :func:`srgb8`) atomically. Never compared."""
-    return write_bytes(path, png_bytes(srgb8(rgb, exposure)))
+def write_png(path, rgb: np.ndarray, exposure: float = 1.0, text: Mapping[str, str] | None = None) -> Path:
+    """Write a tone-mapped sRGB 8-bit preview PNG (see :func:`srgb8`) atomically, with ``tEXt`` chunks
+    ``vlref_version``, ``vlref_exposure`` and ``text``. Never compared."""
+    meta = {"vlref_version": __version__, "vlref_exposure": f"{float(exposure):.6g}", **(text or {})}
+    return write_bytes(path, png_bytes(srgb8(rgb, exposure), meta))
 
 
 def write_bytes(path, data: bytes) -> Path:
@@ -425,10 +503,11 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
     return [write_exr(path, data, metadata=metadata) for path, data in prepared]
 
 
-def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0) -> list[Path]:
+def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0,
+                png_meta: Mapping[str, str] | None = None) -> list[Path]:
     """Write a :class:`vlref.render.RenderResult`: the ``main`` buffers (all with ``stages``) as EXR
-    with the result's metadata, plus the ``final.png`` preview at ``exposure``."""
+    with the result's metadata, plus the ``final.png`` preview at ``exposure`` (``png_meta``: its tEXt)."""
     names = list(result.buffers) if stages else [n for n in main if n in result.buffers]
     paths = save_buffers(out_dir, {n: result.buffers[n] for n in names}, result.metadata)
-    paths.append(write_png(Path(out_dir) / "final.png", result.buffers["final"], exposure=exposure))
+    paths.append(write_png(Path(out_dir) / "final.png", result.buffers["final"], exposure=exposure, text=png_meta))
     return paths

@@ -117,6 +117,8 @@ class RenderResult:
     buffers: dict[str, np.ndarray]
     metadata: dict[str, str]
     timings: dict[str, float]
+    notes: list[str] = field(default_factory=list)
+    """One-line remarks of the technique's ``notes(scene, buffers)`` (source defaults in use, fp16 saturation)."""
 
 
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
@@ -165,4 +167,5 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}
-    return RenderResult(buffers, metadata, timings)
+    notes = technique.notes(scene, out) if hasattr(technique, "notes") else []
+    return RenderResult(buffers, metadata, timings, notes)

@@ -29,7 +29,7 @@ import numpy as np
 from .. import __version__
 from ..errors import InputError
 from ..io import read_image
-from .metrics import FlipResult, error_metrics, failing_pixels, hdr_flip
+from .metrics import FLIP_MISSING, FlipResult, error_metrics, failing_pixels, hdr_flip
 from .presets import Tolerance, tolerance
 
 __all__ = [
@@ -246,23 +246,31 @@ def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
                    help="tolerance preset: exact, float32, gpu-full, gpu-half, gpu-quarter (default float32)")
     p.add_argument("--set", action="append", metavar="KEY=VALUE",
                    help="override a tolerance knob: abs_tol, rel_tol, max_fail_fraction, max_mean_abs, "
-                        "max_flip_mean (none = off), scale (absolute|mean)")
+                        "max_flip_mean (none = off), scale (absolute|mean) (repeatable; default: the preset's)")
     p.add_argument("--ignore-sky", metavar="DEPTH|ref",
-                   help="skip sky pixels: a depth image (inf or >= --sky-depth = sky) or 'ref' (non-finite reference)")
-    p.add_argument("--sky-depth", type=float, default=math.inf, help="depth at and beyond which a pixel is sky")
-    p.add_argument("--border", type=int, default=0, help="ignore this many pixels along every edge")
-    p.add_argument("--mask", help="mask image: compare where nonzero")
-    p.add_argument("--key", help="array name inside .npz inputs")
-    p.add_argument("-o", "--output", help="write report.json, diff.exr, heatmap.png, flip.png, report.html here")
-    p.add_argument("--exposure", type=float, help="preview exposure in the HTML page (default: automatic)")
-    p.add_argument("--no-flip", action="store_true", help="skip HDR-FLIP")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing (use the exit code)")
+                   help="skip sky pixels: a depth image (inf or >= --sky-depth = sky) or 'ref' (non-finite "
+                        "reference) (default: compare sky too)")
+    p.add_argument("--sky-depth", type=float, default=math.inf,
+                   help="depth at and beyond which a pixel is sky (default: inf, only infinite depth)")
+    p.add_argument("--border", type=int, default=0, help="ignore this many pixels along every edge (default: 0)")
+    p.add_argument("--mask", help="mask image: compare where nonzero (default: every pixel)")
+    p.add_argument("--key", help="array name inside .npz inputs (default: the file's only array)")
+    p.add_argument("-o", "--output", help="write report.json, diff.exr, heatmap.png, report.html and, when HDR-FLIP "
+                   "runs (flip-evaluator installed, no --no-flip), flip.png here (default: write nothing)")
+    p.add_argument("--exposure", type=float, help="preview exposure in the HTML page (default: automatic, "
+                   "1/99th percentile of the reference)")
+    p.add_argument("--no-flip", action="store_true", help="skip HDR-FLIP (default: computed when flip-evaluator "
+                   "is installed)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print nothing, use the exit code (default: off)")
     return p
 
 
 def run_compare(args: argparse.Namespace) -> int:
     """Run a comparison from arguments parsed with :func:`add_arguments`; returns the exit code."""
+    from ..io import check_output_dir
     try:
+        if args.output:
+            check_output_dir(args.output)
         report = compare_files(args.ref, args.test, args.preset, _parse_set(args.set),
                                ignore_sky=args.ignore_sky, sky_depth=args.sky_depth, border=args.border,
                                mask=args.mask, key=args.key, out_dir=args.output, exposure=args.exposure,
@@ -270,6 +278,8 @@ def run_compare(args: argparse.Namespace) -> int:
     except InputError as exc:
         print(f"vlref compare: error: {exc}", file=sys.stderr)
         return 2
+    if not args.quiet and report.flip.note == FLIP_MISSING:
+        print(f"vlref compare: note: HDR-FLIP skipped, {FLIP_MISSING}; no flip.png written", file=sys.stderr)
     if not args.quiet:
         print(report.summary())
         if args.output:

@@ -30,6 +30,7 @@ import argparse
 import fnmatch
 import hashlib
 import json
+import os
 import shutil
 import sys
 import time
@@ -44,18 +45,46 @@ from ..cluster import ItemsFailed, add_scheduler_argument
 from ..errors import InputError
 
 __all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
-           "main_golden", "GOLDEN_DIR", "SUITE_FILE", "MANIFEST"]
+           "main_golden", "GOLDEN_DIR", "SUITE_FILE", "MANIFEST", "find_golden_dir", "golden_dir_candidates",
+           "golden_parser"]
 
 SUITE_FILE = Path(__file__).resolve().parents[1] / "data" / "golden_suite.toml"
-def _default_golden_dir() -> Path:
-    """``data/golden`` of the source checkout vlref runs from, else of the working directory."""
-    checkout = Path(__file__).resolve().parents[2] / "data" / "golden"
-    return checkout if checkout.is_dir() else Path.cwd() / "data" / "golden"
-
-
-GOLDEN_DIR = _default_golden_dir()
+CHECKOUT_GOLDEN = Path(__file__).resolve().parents[2] / "data" / "golden"
 MANIFEST = "manifest.json"
 FORMAT = 1
+
+
+def golden_dir_candidates() -> list[Path]:
+    """Where the golden suite is looked for, in order: ``$VLREF_GOLDEN`` alone when set; else the source
+    checkout's ``data/golden`` (development and editable installs) and ``<prefix>/share/vlref/golden``, where
+    ``pip install`` puts it (``setup.cfg`` data_files), as :func:`vlref.scene.bundled.scenes_dir` does."""
+    env = os.environ.get("VLREF_GOLDEN")
+    if env:
+        return [Path(env)]
+    return [CHECKOUT_GOLDEN, Path(sys.prefix) / "share" / "vlref" / "golden"]
+
+
+def find_golden_dir() -> Path:
+    """The first candidate folder holding a manifest; :class:`InputError` naming every place looked at."""
+    candidates = golden_dir_candidates()
+    for c in candidates:
+        if (c / MANIFEST).is_file():
+            return c
+    raise InputError("<installation>", "", "no golden suite found (looked for manifest.json in "
+                     + ", ".join(str(c) for c in candidates) + "); point --dir at a golden folder or set VLREF_GOLDEN")
+
+
+def build_dir() -> Path:
+    """Where ``golden build`` writes without ``--dir``: ``$VLREF_GOLDEN``, else the checkout's ``data/golden``."""
+    env = os.environ.get("VLREF_GOLDEN")
+    if env:
+        return Path(env)
+    if CHECKOUT_GOLDEN.parent.joinpath("scenes").is_dir():
+        return CHECKOUT_GOLDEN
+    raise InputError("<command line>", "--dir", "not running from a source checkout: name the folder to build in")
+
+
+GOLDEN_DIR = CHECKOUT_GOLDEN
 
 
 @dataclass(frozen=True)
@@ -368,16 +397,18 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
     return outcomes + [checked[name] for name in sorted(checked)]
 
 
-def _parser() -> argparse.ArgumentParser:
+def golden_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vlref golden", description="Build or verify the golden suite "
                                 "(verify: exit 0 pass, 1 fail, 2 bad input).")
-    p.add_argument("action", choices=("build", "verify", "list"))
-    p.add_argument("--dir", default=str(GOLDEN_DIR), help=f"golden folder (default {GOLDEN_DIR})")
+    p.add_argument("action", choices=("build", "verify", "list"),
+                   help="build: render and store the goldens; verify: re-render and compare; list: the entries")
+    p.add_argument("--dir", help="golden folder (default: $VLREF_GOLDEN, else the checkout's data/golden, else the "
+                   "installed <prefix>/share/vlref/golden)")
     p.add_argument("--suite", default=str(SUITE_FILE), help="suite file (default: vlref/data/golden_suite.toml)")
     p.add_argument("--only", action="append", metavar="GLOB",
-                   help="entries whose name (scene/technique) matches, e.g. 'pillars/*' (repeatable)")
-    p.add_argument("--preset", help="verify: tolerance preset instead of the manifest's")
-    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary")
+                   help="entries whose name (scene/technique) matches, e.g. 'pillars/*' (repeatable; default: all)")
+    p.add_argument("--preset", help="verify: tolerance preset instead of the manifest's (default: the manifest's)")
+    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary (default: off)")
     add_scheduler_argument(p)
     return p
 
@@ -385,7 +416,7 @@ def _parser() -> argparse.ArgumentParser:
 def main_golden(argv: Sequence[str]) -> int:
     """``vlref golden build|verify|list``: 0 success / pass, 1 verify failed, 2 bad input."""
     try:
-        args = _parser().parse_args(list(argv))
+        args = golden_parser().parse_args(list(argv))
     except SystemExit as exc:
         return int(exc.code or 0)
     log = (lambda *a, **k: None) if args.quiet else print
@@ -396,12 +427,17 @@ def main_golden(argv: Sequence[str]) -> int:
                 print(f"{e.name:32s} {' '.join(e.overrides)}")
             return 0
         if args.action == "build":
+            from ..io import check_output_dir
+
+            args.dir = args.dir or str(build_dir())
+            check_output_dir(args.dir, "--dir")
             manifest = build(args.dir, args.suite, args.only, log, args.scheduler, args.quiet)
             size = sum(p.stat().st_size for p in Path(args.dir).rglob("*") if p.is_file())
             print(f"golden build: {len(manifest['entries'])} entries, {size / 1e6:.2f} MB in {args.dir} "
                   f"({time.perf_counter() - start:.1f} s)")
             return 0
-        outcomes = verify(args.dir, args.suite, args.only, args.preset, log, args.scheduler, args.quiet)
+        outcomes = verify(args.dir or find_golden_dir(), args.suite, args.only, args.preset, log, args.scheduler,
+                          args.quiet)
     except InputError as exc:
         print(f"vlref golden: error: {exc}", file=sys.stderr)
         return 2

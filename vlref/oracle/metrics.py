@@ -97,6 +97,9 @@ def _flip_rgb(image: np.ndarray) -> np.ndarray | None:
     return None
 
 
+FLIP_MISSING = "flip-evaluator is not installed (a core dependency: pip install flip-evaluator)"
+
+
 def hdr_flip(ref: np.ndarray, test: np.ndarray, mask: np.ndarray) -> FlipResult:
     """HDR-FLIP of ``test`` against ``ref`` with the ``flip-evaluator`` package (imported lazily).
 
@@ -113,7 +116,7 @@ def hdr_flip(ref: np.ndarray, test: np.ndarray, mask: np.ndarray) -> FlipResult:
     try:
         import flip_evaluator
     except ImportError:
-        return FlipResult(None, None, "flip-evaluator is not installed")
+        return FlipResult(None, None, FLIP_MISSING)
     r = _flip_rgb(np.where(mask[:, :, None], ref, 0.0))
     t = _flip_rgb(np.where(mask[:, :, None], test, 0.0))
     if r is None:

@@ -626,20 +626,44 @@ def march_port(path, overrides: Sequence[str] = ()) -> dict[str, np.ndarray]:
     return out
 
 
-def _main_export(argv: Sequence[str]) -> int:
-    """``vlref march export SCENE -o DIR``: vlref's own buffers in a port's encodings (:func:`export_port`)."""
+def export_parser() -> argparse.ArgumentParser:
+    """The options of ``vlref march export``."""
     p = argparse.ArgumentParser(prog="vlref march export", description="Export vlref's depth buffer, scene colour "
                                 "and shadow maps in a port's encodings, with port.toml (docs/PORTING.md).")
     p.add_argument("scene", help="scene file or bundled scene name")
-    p.add_argument("-o", "--output", required=True, help="output folder")
-    p.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE", help="override a scene field")
+    p.add_argument("-o", "--output", required=True, help="output folder (required, no default)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                   help="override a scene field (repeatable; default: none)")
     p.add_argument("--depth", default="raw:reversed", choices=["linear", "raw:d3d", "raw:gl", "raw:reversed"],
                    help="camera depth encoding (default raw:reversed)")
     p.add_argument("--shadow", default="depth:reversed",
                    choices=["distance", "depth:linear", "depth:d3d", "depth:gl", "depth:reversed"],
                    help="shadow map encoding (default depth:reversed)")
-    p.add_argument("--uv-origin", default="top", choices=["top", "bottom"])
-    p.add_argument("--camera-forward", default="+z", choices=["+z", "-z"])
+    p.add_argument("--uv-origin", default="top", choices=["top", "bottom"],
+                   help="row 0 of the exported images: top or bottom (default top)")
+    p.add_argument("--camera-forward", default="+z", choices=["+z", "-z"],
+                   help="view-space axis the camera looks along (default +z)")
+    return p
+
+
+def march_parser() -> argparse.ArgumentParser:
+    """The options of ``vlref march``."""
+    p = argparse.ArgumentParser(prog="vlref march", description="Run a scene's technique on a port's exported "
+                                "depth buffer and shadow maps (docs/PORTING.md).")
+    p.add_argument("manifest", help="port manifest (TOML)")
+    p.add_argument("-o", "--output", default="out_march", help="output folder (default out_march)")
+    p.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
+                   help="override a scene field (repeatable; default: none)")
+    p.add_argument("--stages", action="store_true", help="also write every pass's buffer (default: off)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no summary line (default: off)")
+    return p
+
+
+def _main_export(argv: Sequence[str]) -> int:
+    """``vlref march export SCENE -o DIR``: vlref's own buffers in a port's encodings (:func:`export_port`)."""
+    from ..io import check_output_dir
+
+    p = export_parser()
     try:
         args = p.parse_args(list(argv))
     except SystemExit as exc:
@@ -647,6 +671,7 @@ def _main_export(argv: Sequence[str]) -> int:
     depth_enc, _, depth_conv = args.depth.partition(":")
     shadow_enc, _, shadow_conv = args.shadow.partition(":")
     try:
+        check_output_dir(args.output)
         path = export_port(args.scene, args.output, args.set, depth_encoding=depth_enc,
                            depth_convention=depth_conv or "d3d", uv_origin=args.uv_origin,
                            shadow_encoding=shadow_enc, shadow_convention=shadow_conv or "d3d",
@@ -663,22 +688,17 @@ def main_march(argv: Sequence[str]) -> int:
     ``vlref march export SCENE -o DIR`` (:func:`_main_export`)."""
     if argv and argv[0] == "export":
         return _main_export(argv[1:])
-    from ..io import output_dir, write_exr
+    from ..io import check_output_dir, output_dir, write_exr
     from ..render import scene_hash
 
-    p = argparse.ArgumentParser(prog="vlref march", description="Run a scene's technique on a port's exported "
-                                "depth buffer and shadow maps (docs/PORTING.md).")
-    p.add_argument("manifest", help="port manifest (TOML)")
-    p.add_argument("-o", "--output", default="out_march", help="output folder (default out_march)")
-    p.add_argument("--set", action="append", metavar="KEY.PATH=VALUE", help="override a scene field")
-    p.add_argument("--stages", action="store_true", help="also write every pass's buffer")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p = march_parser()
     try:
         args = p.parse_args(list(argv))
     except SystemExit as exc:
         return int(exc.code or 0)
     start = time.perf_counter()
     try:
+        check_output_dir(args.output)
         port = load_port(args.manifest, args.set or ())
         frame = port_frame(port, args.manifest)
         technique = importlib.import_module(f"vlref.techniques.{port.scene.render.technique}")

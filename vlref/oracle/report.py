@@ -22,7 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import default_channel_names, output_dir, png_bytes, srgb8, write_exr, write_text, write_bytes
+from ..io import (default_channel_names, output_dir, percentile_exposure, png_bytes, srgb8, write_bytes, write_exr,
+                  write_text)
 
 __all__ = ["colour_map", "heat_top", "json_ready", "write_outputs", "render_html", "preview_exposure"]
 
@@ -68,9 +69,7 @@ def _display(image: np.ndarray) -> np.ndarray:
 
 def preview_exposure(report) -> float:
     """1 / (99th percentile of the reference's finite compared values), or 1 when that is not positive."""
-    values = np.abs(report.ref[report.mask])
-    p99 = float(np.percentile(values, 99.0)) if values.size else 0.0
-    return 1.0 / p99 if p99 > 0 and math.isfinite(p99) else 1.0
+    return percentile_exposure(np.abs(report.ref[report.mask]), 99.0)[0]
 
 
 def _masked(image: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -42,9 +42,26 @@ def load_scene(scene: str | Path | None = None, overrides: Iterable[str] = ()) -
     except OSError as exc:
         raise InputError(str(path), "", f"cannot read scene file ({exc.strerror or exc})") from None
     data = parse_scene(text, str(path))
-    data = apply_overrides(data, [parse_override(o) for o in overrides], str(path))
-    scene_obj = build(Scene, data, str(path), path.resolve().parent)
+    overrides = [str(o) for o in overrides]
+    parsed = [parse_override(o) for o in overrides]
+    data = apply_overrides(data, parsed, str(path))
+    try:
+        scene_obj = build(Scene, data, str(path), path.resolve().parent)
+    except InputError as exc:
+        raise _blame_override(exc, overrides, parsed) from None
     return scene_obj.replace(source=str(path))
+
+
+def _blame_override(exc: InputError, texts: list[str], parsed: list[tuple[list[str | int], Any]]) -> InputError:
+    """``exc`` re-addressed to ``<command line>: --set KEY=VALUE`` when its key lies under an override's key
+    (the last such override: the value that won); else ``exc`` unchanged."""
+    for text, (parts, _) in reversed(list(zip(texts, parsed))):
+        key = ""
+        for part in parts:
+            key = join_path(key, part)
+        if exc.path == key or exc.path.startswith((key + ".", key + "[")):
+            return InputError(CLI, f"--set {text.strip()}", exc.reason)
+    return exc
 
 
 def parse_scene(text: str, file: str) -> dict:

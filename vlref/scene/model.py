@@ -56,7 +56,9 @@ class RenderSettings:
     precision: str = F("float64", "floating-point type of the march", choices=("float64", "float32"))
     sky_color: Vec3 = F((0.0, 0.0, 0.0), "radiance of pixels that hit nothing (linear RGB)", min=0.0)
     ambient: Vec3 = F((0.02, 0.02, 0.02), "ambient term of the scene colour (linear RGB)", min=0.0)
-    exposure: float = F(1.0, "multiplier applied before tone mapping PNG previews", gt=0.0)
+    exposure: float = F(1.0, "multiplier applied before tone mapping PNG previews (after auto_exposure)", gt=0.0)
+    auto_exposure: float = F(99.0, "PNG previews: this percentile of the final image's luminance maps to 1 before "
+                             "tone mapping (then times exposure); 0 = off, exposure alone", min=0.0, max=100.0)
 
 
 @dataclass(frozen=True)

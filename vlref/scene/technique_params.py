@@ -61,14 +61,15 @@ class KillzoneParams:
 class SlightlyMadParams:
     """SlightlyMad/VolumetricLights (seed 001 and its public shaders); defaults from VolumetricLight.cs.
 
-    The VL component parameters apply to every light of the scene (VL sets them per light).
+    The VL component parameters apply to every light of the scene (VL sets them per light). The medium is
+    the scene's by default (``medium = "scene"``); ``medium = "source"`` switches to VL's own parameters.
     """
 
     steps: int = F(8, "SampleCount", min=1, max=64)
     resolution: str = F("half", "VolumetricLightRenderer.Resolution", choices=("full", "half", "quarter"))
-    medium: str = F("source", "where scattering, extinction, MieG, height fog and noise come from: source = the "
-                    "VL parameters below (VL's defaults); scene = the scene's [medium] (sigma_t = sigma_s + sigma_a)",
-                    choices=("source", "scene"))
+    medium: str = F("scene", "where scattering, extinction, MieG, height fog and noise come from: scene = the "
+                    "scene's [medium] (sigma_t = sigma_s + sigma_a), so techniques compare on one scene; source = "
+                    "the VL parameters below (VL's defaults, its own preset)", choices=("source", "scene"))
     scattering: float = F(0.5, "ScatteringCoef (1/m)", min=0.0)
     extinction: float = F(0.01, "ExtinctionCoef (1/m)", min=0.0)
     skybox_extinction: float = F(0.9, "SkyboxExtinctionCoef (directional alpha on sky pixels)", min=0.0, max=1.0)

@@ -8,9 +8,11 @@ height, ``W_o = floor(H_o · aspect)``):
    transparent occluders the light they pass: ``gpugems`` the RGB transmittance ``Π (1 - opacity) tint``
    of the transparent surfaces in front of the first opaque one; ``disenone`` its replacement shaders
    over a white background, ``α (1 - α) + (1 - α) occ`` with ``α = 1 - mean transmittance`` (one layer);
-2. ``light_image``: ``gpugems`` the occlusion times the light's colour x intensity inside a disc of
-   ``light_radius`` pixels around the light's screen position (the chapter's pre-pass: light bright,
-   occluders black) [U: the disc is ours]; ``disenone`` ``radiate`` (peak 0.5, parabolic falloff, white);
+2. ``light_image``: ``gpugems`` the occlusion times the light's colour (clamped to [0, 1]: the pre-pass is
+   an LDR target, light bright and occluders black) inside an anti-aliased disc (:func:`disc_coverage`) of
+   ``light_radius`` pixels around the light's screen position [U: the disc is ours; the light's intensity
+   does not enter, or one tap alone would saturate]; ``disenone`` ``radiate`` (peak 0.5, parabolic falloff,
+   white);
 3. ``radial``: the radial loop, Listing 13-1 (``radial_blur``) or disenone's 32-tap variant
    (``disenone_scatter``), before exposure;
 4. ``inscatter`` = radial x exposure (x the fade factor, x visibility), bilinearly upsampled to the
@@ -32,7 +34,7 @@ from ..post.composite import composite_add
 from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, radial_blur, radiate)
 from ..post.upsample import bilinear_upsample
 
-__all__ = ["render", "radial_light", "variant_params", "occlusion_buffer", "VARIANT_DEFAULTS"]
+__all__ = ["render", "radial_light", "variant_params", "occlusion_buffer", "disc_coverage", "VARIANT_DEFAULTS"]
 
 VARIANT_DEFAULTS = {
     "gpugems": dict(num_samples=100, density=0.84, weight=5.65, decay=1.0, exposure=0.0034, fade=False),
@@ -41,6 +43,18 @@ VARIANT_DEFAULTS = {
 """gpugems: F. Sanglard's GLSL port (NOT the book's, which has none); disenone: its C# ``Params``."""
 GPUGEMS_DISC_FRACTION = 0.05
 DISENONE_RADIUS_PX = 100.0
+
+
+def disc_coverage(width: int, height: int, uv, radius: float) -> np.ndarray:
+    """Pixel coverage (height, width) of a disc of ``radius`` pixels centred at ``uv`` (image uv, v down).
+
+    ``clip(radius + 1/2 - r, 0, 1)``, ``r`` the distance of the pixel centre from the disc centre in pixels:
+    the area a straight edge covers of a 1-pixel box, so the rim is anti-aliased (a hard ``r <= radius``
+    test gives a staircase rim that the radial loop magnifies by ``1 / (1 - Density)``).
+    """
+    u, v = (np.arange(width) + 0.5) / width, (np.arange(height) + 0.5) / height
+    r = np.hypot((u[None, :] - uv[0]) * width, (v[:, None] - uv[1]) * height)
+    return np.clip(radius + 0.5 - r, 0.0, 1.0)
 
 
 def variant_params(p) -> dict:
@@ -116,10 +130,8 @@ def render(scene, frame) -> dict:
     exposure = disenone_exposure(v["exposure"], angle, cam.fov / 2.0) if v["fade"] else v["exposure"]
     if p.variant == "gpugems":
         radius = p.light_radius if p.light_radius is not None else GPUGEMS_DISC_FRACTION * ho
-        u, vv = (np.arange(wo) + 0.5) / wo, (np.arange(ho) + 0.5) / ho
-        r2 = ((u[None, :] - uv[0]) * wo) ** 2 + ((vv[:, None] - uv[1]) * ho) ** 2
-        colour = np.asarray(light.color, dtype=np.float64) * light.intensity
-        image = occ * (r2 <= radius * radius)[..., None] * colour
+        colour = np.minimum(np.asarray(light.color, dtype=np.float64), 1.0)
+        image = occ * disc_coverage(wo, ho, uv, radius)[..., None] * colour
         rad = radial_blur(image, uv, v["num_samples"], v["density"], v["weight"], v["decay"], 1.0)
     else:
         radius = p.light_radius if p.light_radius is not None else DISENONE_RADIUS_PX

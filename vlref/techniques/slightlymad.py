@@ -30,14 +30,14 @@ from ..march.segments import cone_segment, sphere_segment
 from ..march.slightlymad import CONE_COOKIE_ONLY, dither_offsets, spot_profile_cookie, vl_march, vl_view_tau
 from ..medium import pack_medium
 from ..post.blur import vl_blur_pass
-from ..post.composite import blend_add_fp16, composite_vl, fp16
+from ..post.composite import FP16_MAX, blend_add_fp16, composite_vl, fp16
 from ..post.downsample import downsample_vl
 from ..post.resolution import low_res_size
 from ..post.upsample import vl_upsample
 from ..render import resolved
 from ..scene.model import Cookie, HeightFog, Medium, Noise
 
-__all__ = ["render", "light_segments", "vl_medium", "srgb_to_linear", "cone_mesh_planes"]
+__all__ = ["render", "notes", "light_segments", "vl_medium", "srgb_to_linear", "cone_mesh_planes"]
 
 SKY_LINEAR01 = 0.999999
 """VL's sky test: ``Linear01Depth > 0.999999`` (§1.4)."""
@@ -310,3 +310,31 @@ def render(scene, frame) -> dict:
     out["final"] = composite_vl(frame.scene_colour, full)
     out["composite"] = out["final"]
     return out
+
+
+def notes(scene, out) -> list[str]:
+    """What ``vlref render`` tells the user about this render: the VL defaults that replace the scene's own
+    settings (each with its switch), and how many march pixels saturate fp16 (65504) when ``fp16`` is on."""
+    p = scene.techniques.slightlymad
+    kinds = {light.type for light in scene.lights}
+    source = []
+    if p.medium == "source":
+        source.append(f"VL's medium (scattering {p.scattering:g}, extinction {p.extinction:g}, MieG {p.mie_g:g}; "
+                      'medium = "scene" for the scene\'s)')
+    if p.attenuation == "unity_lut" and any(l.type != "directional" and l.attenuation != "unity" for l in scene.lights):
+        source.append('Unity\'s range-normalised attenuation LUT (attenuation = "scene" for the lights\' laws)')
+    if p.spot_cone == "cookie" and "spot" in kinds:
+        source.append('the spot cookie as the cone falloff (spot_cone = "scene")')
+    if p.point_srgb_quirk and any(l.type == "point" and max(l.color) * l.intensity > 1.0 for l in scene.lights):
+        source.append("point colour x intensity through sRGB->linear (point_srgb_quirk = false)")
+    lines = []
+    if source:
+        lines.append("slightlymad uses VolumetricLights' defaults, not the scene's: " + "; ".join(source)
+                     + " [techniques.slightlymad]")
+    if p.fp16:
+        stored = [out[k][..., :3] for k in ("march", "blur_h", "blur_v", "upsample") if k in out]
+        saturated = max(int((a >= FP16_MAX).any(axis=-1).sum()) for a in stored)
+        if saturated:
+            lines.append(f"slightlymad: {saturated} texel(s) of a buffer saturate fp16 (65504); lower the "
+                         "light intensity or the medium's scattering (fp16 = false lifts VL's fp16 storage)")
+    return lines

@@ -1,0 +1,183 @@
+"""The `vlref` command as a new user meets it (issue 17, items 2-7), run as subprocesses: memory refusal,
+early output checks, --set errors, the installed golden suite, HDR-FLIP's absence, and help texts."""
+
+import argparse
+import configparser
+import os
+import resource
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vlref.bench import bench_parser
+from vlref.cli import build_parser
+from vlref.io import write_exr
+from vlref.oracle.golden import golden_parser
+from vlref.oracle.port_buffers import export_parser, march_parser
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def vlref(*args, cwd=None, env=None, preexec_fn=None, python=("-m", "vlref")):
+    """Run ``python -m vlref ARGS`` with this checkout on the path; returns the CompletedProcess."""
+    full_env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
+                **(env or {})}
+    return subprocess.run([sys.executable, *python, *args], capture_output=True, text=True, cwd=cwd, env=full_env,
+                          preexec_fn=preexec_fn, timeout=300)
+
+
+# ---------------------------------------------------------------- 2: memory estimate
+
+def _limit_address_space():
+    resource.setrlimit(resource.RLIMIT_AS, (16 * 2 ** 30, resource.RLIM_INFINITY))
+
+
+def test_a_render_larger_than_memory_is_refused_before_allocating(tmp_path):
+    out = tmp_path / "big"
+    r = vlref("render", "--set", "render.width=16384", "--set", "render.height=16384", "-o", str(out),
+              preexec_fn=_limit_address_space)
+    assert r.returncode == 2, r.stderr
+    line = r.stderr.strip().splitlines()[-1]
+    assert "pillars.toml: render.width: needs about " in line and " GB available" in line
+    needed = float(line.split("needs about ")[1].split(" GB")[0])
+    available = float(line.split(", ")[-1].split(" GB")[0])
+    assert 16384 ** 2 * 200 / 1e9 < needed < 16384 ** 2 * 400 / 1e9 and available <= 16 * 2 ** 30 / 1e9 + 0.05
+    assert "--ignore-memory-check" in line and not out.exists()
+
+
+# ---------------------------------------------------------------- 3: output checked before any work
+
+@pytest.mark.parametrize("args", [
+    ["render", "no_such_scene", "-o", "{file}"],
+    ["reference", "no_such_scene", "-o", "{file}"],
+    ["bias", "no_such_scene", "--technique", "physical", "-o", "{file}"],
+    ["compare", "missing_a.exr", "missing_b.exr", "-o", "{file}"],
+    ["golden", "build", "--suite", "missing.toml", "--dir", "{file}"],
+    ["march", "missing_port.toml", "-o", "{file}"],
+    ["march", "export", "no_such_scene", "-o", "{file}"],
+    ["render", "-o", "{file}/sub"],
+    ["bench", "-o", "{folder}"],
+])
+def test_an_unusable_output_is_refused_before_any_work(tmp_path, args):
+    """Every input here is also bad (or, for bench, slow): the output error coming first shows the check
+    runs before any input is read or any work is done."""
+    existing = tmp_path / "existing.txt"
+    existing.write_text("keep me")
+    r = vlref(*[a.format(file=existing, folder=tmp_path) for a in args], cwd=tmp_path)
+    assert r.returncode == 2, (r.returncode, r.stderr)
+    assert "<command line>: " in r.stderr and str(existing if "{folder}" not in args else tmp_path) in r.stderr
+    assert ("is not a folder" in r.stderr or "is a file, not a folder" in r.stderr or "is a folder, not a file"
+            in r.stderr), r.stderr
+    assert existing.read_text() == "keep me"
+
+
+def test_an_unwritable_output_folder_is_refused(tmp_path, monkeypatch):
+    """Permission bits do not bind root, so the refusal is tested with os.access answering 'no'."""
+    from vlref.errors import InputError
+    from vlref.io import check_output_dir
+
+    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)
+    with pytest.raises(InputError, match=f"{tmp_path} is not writable"):
+        check_output_dir(tmp_path / "out")
+
+
+# ---------------------------------------------------------------- 4: --set errors name the command line
+
+@pytest.mark.parametrize("setting, reason", [
+    ("render.width=abc", "expected an integer"),
+    ("lights.0.intensity=-1", "must be >= 0"),
+])
+def test_a_bad_set_value_is_reported_against_the_command_line(tmp_path, setting, reason):
+    r = vlref("render", "--set", setting, "-o", str(tmp_path / "o"))
+    assert r.returncode == 2
+    assert r.stderr.startswith(f"vlref: error: <command line>: --set {setting}: {reason}"), r.stderr
+    assert "pillars.toml" not in r.stderr and not (tmp_path / "o").exists()
+
+
+# ---------------------------------------------------------------- 5: the golden suite from anywhere
+
+def test_golden_verify_finds_the_suite_from_another_folder(tmp_path):
+    r = vlref("golden", "verify", "-q", "--only", "pillars/radial", cwd=tmp_path)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 of 1 passed" in r.stdout
+
+
+def test_golden_verify_says_where_it_looked_and_how_to_point_dir(tmp_path):
+    nowhere = tmp_path / "nowhere"
+    r = vlref("golden", "verify", cwd=tmp_path, env={"VLREF_GOLDEN": str(nowhere)})
+    assert r.returncode == 2
+    assert f"looked for manifest.json in {nowhere}" in r.stderr and "--dir" in r.stderr
+
+
+def test_every_golden_file_is_installed_by_setup_cfg():
+    """``pip install`` puts data/golden under <prefix>/share/vlref/golden, where `golden verify` looks."""
+    cfg = configparser.ConfigParser()
+    cfg.read(ROOT / "setup.cfg")
+    installed = set()
+    for target, sources in cfg["options.data_files"].items():
+        for pattern in (s.strip() for s in sources.split(",") if s.strip()):
+            for f in ROOT.glob(pattern):
+                installed.add((target, f.relative_to(ROOT)))
+    golden = ROOT / "data" / "golden"
+    missing = [f.relative_to(ROOT) for f in golden.rglob("*") if f.is_file()
+               if ("share/vlref/" + str(f.parent.relative_to(ROOT / "data")), f.relative_to(ROOT)) not in installed]
+    lines = sorted({f"share/vlref/{p.parent.relative_to('data')} = {p.parent}/*{p.suffix}" for p in missing})
+    assert not missing, "add to [options.data_files] of setup.cfg:\n" + "\n".join(lines)
+
+
+# ---------------------------------------------------------------- 6: HDR-FLIP
+
+def test_flip_evaluator_is_a_core_dependency():
+    cfg = configparser.ConfigParser()
+    cfg.read(ROOT / "setup.cfg")
+    assert "flip-evaluator" in cfg["options"]["install_requires"]
+
+
+def test_compare_without_flip_evaluator_says_so_once_and_writes_no_flip_png(tmp_path):
+    rng = np.random.default_rng(3)
+    ref = rng.uniform(0.1, 1.0, (16, 16, 3))
+    write_exr(tmp_path / "ref.exr", ref)
+    write_exr(tmp_path / "test.exr", ref)
+    blocked = ("import sys; sys.modules['flip_evaluator'] = None; from vlref.cli import main; "
+               "sys.exit(main(sys.argv[1:]))")
+    r = vlref("compare", str(tmp_path / "ref.exr"), str(tmp_path / "test.exr"), "-o", str(tmp_path / "rep"),
+              python=("-c", blocked))
+    assert r.returncode == 0, r.stderr
+    assert r.stderr.count("flip-evaluator is not installed") == 1 and "pip install flip-evaluator" in r.stderr
+    assert (tmp_path / "rep" / "report.html").is_file() and not (tmp_path / "rep" / "flip.png").exists()
+    r = vlref("compare", "--help")
+    assert "flip.png" in r.stdout and "when HDR-FLIP" in " ".join(r.stdout.split())
+
+
+# ---------------------------------------------------------------- 7: help texts
+
+def _parsers():
+    top = build_parser()
+    sub = next(a for a in top._actions if isinstance(a, argparse._SubParsersAction))
+    own = {"golden": golden_parser(), "march": march_parser(), "march export": export_parser(),
+           "bench": bench_parser()}
+    return {**{name: p for name, p in sub.choices.items() if name not in own}, **own}
+
+
+def test_every_option_of_every_command_says_what_it_does_and_its_default():
+    parsers = _parsers()
+    assert {"render", "scenes", "reference", "bias", "compare", "golden", "march", "march export",
+            "bench"} <= set(parsers)
+    for name, parser in parsers.items():
+        for action in parser._actions:
+            if isinstance(action, (argparse._HelpAction, argparse._VersionAction)):
+                continue
+            label = f"vlref {name} {'/'.join(action.option_strings) or action.dest}"
+            assert action.help and action.help.strip() and action.help != argparse.SUPPRESS, f"{label}: no help"
+            if action.option_strings:
+                text = action.help.lower()
+                assert "default" in text or "required" in text, f"{label}: help does not state the default"
+
+
+def test_help_of_each_command_runs():
+    for args in (["render", "--help"], ["golden", "--help"], ["march", "export", "--help"]):
+        r = vlref(*args)
+        assert r.returncode == 0 and "default" in r.stdout, args
