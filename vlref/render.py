@@ -13,6 +13,10 @@ returns named float buffers; ``RenderResult.buffers`` gathers them under stable 
 =================  ============================================================
 
 With ``stages=True`` the technique's intermediate buffers and every shadow map are added.
+
+Temporal techniques (``froxel`` with ``temporal = true``) read the previous frame's state from
+``render(..., history=)`` and return theirs as ``RenderResult.history`` (None for the others);
+:func:`vlref.animation.render_sequence` chains them over frames.
 """
 
 from __future__ import annotations
@@ -79,7 +83,7 @@ def scene_hash(scene: Scene) -> str:
 class Frame:
     """Everything the volumetric passes of one frame read, built once per render.
 
-    ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
+    ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
     :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
     (:func:`vlref.oracle.port_buffers.port_frame`).
     """
@@ -91,6 +95,7 @@ class Frame:
     lights: Any
     scene_colour: np.ndarray
     shadow_cache: dict = field(default_factory=dict, repr=False)
+    history: Any = field(default=None, repr=False)
 
     def shadow_maps(self, shadow_filter: str | None = None):
         """The lights' shadow maps, built on first use (cascades depend on the camera).
@@ -117,6 +122,7 @@ class RenderResult:
     buffers: dict[str, np.ndarray]
     metadata: dict[str, str]
     timings: dict[str, float]
+    history: Any = None
 
 
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
@@ -137,8 +143,9 @@ def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Fr
     return Frame(scene, camera, geometry, gbuffer, lights, colour)
 
 
-def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None) -> RenderResult:
-    """Render ``scene`` with its ``render.technique``; see the module docstring for the buffers."""
+def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None,
+           history: Any = None) -> RenderResult:
+    """Render ``scene`` with its ``render.technique``; see the module docstring for the buffers and ``history``."""
     timings: dict[str, float] = {}
     last = [time.perf_counter()]
 
@@ -150,8 +157,10 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
             progress(name)
 
     frame = prepare_frame(scene, tick)
+    frame.history = history
     technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
     out = technique.render(scene, frame)
+    next_history = out.pop("history", None)
     tick("volumetrics")
 
     g = frame.gbuffer
@@ -165,4 +174,4 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}
-    return RenderResult(buffers, metadata, timings)
+    return RenderResult(buffers, metadata, timings, next_history)

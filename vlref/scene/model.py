@@ -20,7 +20,7 @@ from .technique_params import TechniqueParams
 
 Vec3 = tuple[float, float, float]
 
-TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial")
+TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial", "froxel")
 SAMPLINGS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 RESOLUTIONS = ("full", "half", "third", "quarter")
 RESOLUTION_DIVISORS = {"full": 1, "half": 2, "third": 3, "quarter": 4}
@@ -51,6 +51,7 @@ class RenderSettings:
     resolution: Optional[str] = F(None, "march resolution relative to the frame (default: the technique's)",
                                   choices=RESOLUTIONS)
     seed: int = F(0, "seed of the hash pattern and of the procedural noise", min=0)
+    frame: int = F(0, "frame index: the [animation] state rendered and the temporal jitter", min=0)
     time: float = F(0.0, "scene time in seconds (animates the noise)")
     max_distance: float = F(100.0, "view rays are cut at this distance (metres)", gt=0.0)
     precision: str = F("float64", "floating-point type of the march", choices=("float64", "float32"))
