@@ -34,6 +34,7 @@ import numpy as np
 
 from . import __version__
 from .camera import Camera, camera_from_settings
+from .scene.animation import scene_at
 from .scene.model import Scene
 
 __all__ = ["Frame", "RenderResult", "render", "prepare_frame", "resolved", "scene_hash", "scene_settings_json"]
@@ -126,12 +127,14 @@ class RenderResult:
 
 
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
-    """Camera, geometry, G-buffer, packed lights and scene colour of ``scene``."""
+    """Camera, geometry, G-buffer, packed lights and scene colour of ``scene`` at its ``render.frame``
+    (:func:`vlref.scene.animation.scene_at`; ``Frame.scene`` is the evaluated scene)."""
     from .geometry import build_geometry, raycast
     from .lights import pack_lights
     from .lights.shading import scene_colour
 
     tick = tick or (lambda name: None)
+    scene = scene_at(scene)
     camera = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
     geometry = build_geometry(scene)
     tick("geometry")
@@ -159,7 +162,7 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
     frame = prepare_frame(scene, tick)
     frame.history = history
     technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
-    out = technique.render(scene, frame)
+    out = technique.render(frame.scene, frame)
     next_history = out.pop("history", None)
     tick("volumetrics")
 

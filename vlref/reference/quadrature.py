@@ -261,6 +261,7 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
 
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
+    scene = frame.scene  # evaluated at render.frame (animated scenes)
     cam = frame.camera
     dirs = cam.ray_directions()
     surface = cam.eye_depth_to_distance(frame.gbuffer.depth, dirs)
