@@ -3,7 +3,8 @@
 History format (:class:`History`): the previous frame's *blended* scattering grid ``grid`` (gh, gw, D, 4)
 = ``(S_r, S_g, S_b, σt)`` (the layout of :mod:`vlref.froxel.grid`), ``frames`` (gh, gw, D) the number
 of frames accumulated in each froxel, and what reprojection needs of that frame: its camera (for the
-view-projection), slice boundaries and linear eye depth buffer.
+view-projection), slice boundaries and ``tile_depth`` (gh, gw): per column, the farthest eye depth
+of the pixels any bilinear lookup of that column can serve (:func:`tile_depth`).
 
 Per froxel of the current frame (:func:`reproject_blend`, prange over columns):
 
@@ -11,9 +12,10 @@ Per froxel of the current frame (:func:`reproject_blend`, prange over columns):
    accumulated mean of every jitter) is placed in the world and projected with the previous
    view-projection: previous uv ``(u, v)`` and eye depth ``z'`` (clip ``w``);
 2. rejection: out of the previous frustum (``z' <= 0``, ``u`` or ``v`` outside [0, 1], ``z'`` beyond the
-   previous grid's far depth), or disoccluded: ``z'`` lies behind the previous frame's scene depth at
-   the nearest previous pixel by more than one previous slice thickness at that depth (an engine that
-   culls froxels behind the depth buffer has no valid history there). A rejected froxel takes the
+   previous grid's far depth), or hidden: ``z'`` lies behind the previous ``tile_depth`` of the nearest previous
+   column by more than one previous slice thickness at that depth (no pixel of the previous frame could
+   read that froxel, so an engine that culls hidden froxels has no valid history there; this is the
+   disocclusion test of a froxel grid). A rejected froxel takes the
    current value and restarts its count (``frames = 1``);
 3. otherwise the history is fetched trilinearly (clamp to edge) at ``(u·gw - ½, v·gh - ½, s' - ½)``,
    ``s' = depth_to_slice(z')``, the frame count likewise; with ``clamp`` on it is first clamped per
@@ -39,7 +41,7 @@ from numba import njit, prange
 from ..camera import Camera
 from .grid import depth_to_slice
 
-__all__ = ["History", "reproject_blend"]
+__all__ = ["History", "reproject_blend", "tile_depth"]
 
 
 @dataclass
@@ -50,7 +52,22 @@ class History:
     frames: np.ndarray
     camera: Camera
     bounds: np.ndarray
-    depth: np.ndarray
+    tile_depth: np.ndarray
+
+
+def tile_depth(depth: np.ndarray, gw: int, gh: int) -> np.ndarray:
+    """(gh, gw): per column, the largest eye depth over the pixels of its own and its 8 neighbours' tiles
+    (tile of column ``c``: pixel columns ``floor(c W/gw) .. ceil((c+1) W/gw) - 1``, likewise rows), i.e.
+    every pixel whose bilinear apply lookup reads that column; ``inf`` where any of them is sky."""
+    from scipy.ndimage import maximum_filter
+
+    h, w = depth.shape
+    out = np.empty((gh, gw))
+    for r in range(gh):
+        rows = slice(r * h // gh, -(-(r + 1) * h // gh))
+        for c in range(gw):
+            out[r, c] = depth[rows, c * w // gw:-(-(c + 1) * w // gw)].max()
+    return maximum_filter(out, size=3, mode="nearest")
 
 
 @njit(cache=True, fastmath=False, inline="always")
@@ -79,15 +96,14 @@ def _fetch(grid, frames, gx, gy, gz, out):
 
 @njit(cache=True, fastmath=False, parallel=True)
 def reproject_blend(current, dirs, origin, forward, bounds, prev_vp, prev_grid, prev_frames, prev_bounds,
-                    prev_depth, alpha, clamp, out, out_frames, valid):
+                    prev_tile_depth, alpha, clamp, out, out_frames, valid):
     """Blend ``current`` (gh, gw, D, 4) with the reprojected history into ``out`` (module docstring).
 
     ``dirs`` (gh, gw, 3) the current columns' centre rays; ``prev_vp`` the previous 4x4 view-projection
-    (``clip = VP (x, 1)``, ``w`` = eye depth); ``prev_depth`` (H', W') the previous eye depth.
+    (``clip = VP (x, 1)``, ``w`` = eye depth); ``prev_tile_depth`` the previous :func:`tile_depth`.
     ``out_frames`` (gh, gw, D) the new counts, ``valid`` (gh, gw, D) 1 where the history was used.
     """
     gh, gw, d = current.shape[0], current.shape[1], current.shape[2]
-    ph, pw = prev_depth.shape
     pd = prev_bounds.shape[0] - 1
     pgh, pgw = prev_grid.shape[0], prev_grid.shape[1]
     cap = math.ceil(1.0 / alpha)
@@ -110,9 +126,9 @@ def reproject_blend(current, dirs, origin, forward, bounds, prev_vp, prev_grid, 
             s = 0.0
             if ok:
                 s = depth_to_slice(prev_bounds, cw)
-                px, py = min(int(u * pw), pw - 1), min(int(v * ph), ph - 1)
+                px, py = min(int(u * pgw), pgw - 1), min(int(v * pgh), pgh - 1)
                 sk = min(int(s), pd - 1)
-                ok = cw <= prev_depth[py, px] + (prev_bounds[sk + 1] - prev_bounds[sk])
+                ok = cw <= prev_tile_depth[py, px] + (prev_bounds[sk + 1] - prev_bounds[sk])
             n = 0.0
             if ok:
                 n = _fetch(prev_grid, prev_frames, u * pgw - 0.5, v * pgh - 0.5, s - 0.5, h)

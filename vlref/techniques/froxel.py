@@ -29,7 +29,7 @@ import numpy as np
 
 from ..froxel.grid import column_rays, grid_image, jitter_offsets, slice_depths
 from ..froxel.kernels import froxel_apply, froxel_integrate, froxel_scatter
-from ..froxel.temporal import History, reproject_blend
+from ..froxel.temporal import History, reproject_blend, tile_depth
 from ..medium import pack_medium
 
 __all__ = ["render", "grid_bounds"]
@@ -73,11 +73,11 @@ def render(scene, frame) -> dict:
             lit[...] = scatter
         else:
             reproject_blend(scatter, centre, origin, forward, bounds, prev.camera.view_projection(),
-                            prev.grid, prev.frames, prev.bounds, prev.depth, p.history_alpha, p.history_clamp, lit,
+                            prev.grid, prev.frames, prev.bounds, prev.tile_depth, p.history_alpha, p.history_clamp, lit,
                             frames, valid)
         out.update({"froxel_history": grid_image(lit), "froxel_history_frames": grid_image(frames[..., None])[..., 0],
                     "froxel_history_valid": grid_image(valid[..., None])[..., 0],
-                    "history": History(lit, frames, cam, bounds, frame.gbuffer.depth)})
+                    "history": History(lit, frames, cam, bounds, tile_depth(frame.gbuffer.depth, gw, gh))})
     integrated = np.empty_like(lit)
     froxel_integrate(lit, centre, forward, bounds, integrated)
     inscatter = np.empty((cam.height, cam.width, 3))
