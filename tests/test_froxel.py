@@ -117,7 +117,8 @@ def test_converges_to_the_closed_form_as_slices_grow(closed_form_scene):
         rel = np.abs(res.buffers["inscatter"][..., 0] - exact) / exact
         np.testing.assert_allclose(res.buffers["transmittance"], np.exp(-0.1 * t), atol=0.05)
         errors.append(rel.max())
-    # second order in the slice thickness: x4 slices -> the error falls by about 16 (measured 14.7, 14.7)
+    # second order in the slice thickness: x4 slices -> the error falls by about 16
+    # (measured 2.7e-2, 1.7e-3, 1.1e-4: /16.0, /14.7)
     assert errors[0] > 10 * errors[1] > 100 * errors[2]
     assert errors[2] < 2e-4
 
