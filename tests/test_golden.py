@@ -96,7 +96,12 @@ def test_applicability_rules():
     entries = {(e.scene, e.technique) for e in suite_entries(suite)}
     for name, path in bundled_scenes().items():
         scene = load_scene(path, [f"render.width={suite.width}", f"render.height={suite.height}"])
-        for t in ("physical", "killzone", "slightlymad"):
+        if scene.animation is not None:  # animated scenes: physical and froxel at frames 0 and 3
+            assert {t for s, t in entries if s == name} == {"physical", "froxel"}
+            assert {e.name for e in suite_entries(suite) if e.scene == name} == {
+                f"{name}@{f}/{t}" for f in (0, 3) for t in ("physical", "froxel")}
+            continue
+        for t in ("physical", "killzone", "slightlymad", "froxel"):
             assert (name, t) in entries
         has_sun = any(l.type == "directional" for l in scene.lights)
         assert ((name, "urp") in entries) == has_sun

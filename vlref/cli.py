@@ -65,6 +65,8 @@ def cmd_render(args) -> int:
     from .render import render
 
     scene = _load(args)
+    if args.frames is not None:
+        return _render_frames(args, scene)
     bar = _progress(args.quiet, 5, f"render {Path(scene.source).stem}")
     result = render(scene, stages=args.stages, progress=(lambda name: bar.update(1)) if bar else None)
     exposure, png_meta, phrase = _preview_exposure(scene, result.buffers["final"])
@@ -78,6 +80,23 @@ def cmd_render(args) -> int:
         total = sum(result.timings.values())
         print(f"wrote {args.output} ({scene.render.width}x{scene.render.height}, "
               f"{scene.render.technique}, {total:.2f} s; {phrase})", file=sys.stderr)
+    return 0
+
+
+def _render_frames(args, scene) -> int:
+    """``vlref render --frames A:B``: a numbered EXR sequence and previews (:mod:`vlref.sequence`)."""
+    from .io import output_dir
+    from .sequence import parse_frames, write_sequence
+
+    frames = parse_frames(args.frames, scene)
+    bar = _progress(args.quiet, len(frames), f"render {Path(scene.source).stem} frames")
+    with output_dir(args.output) as out:
+        write_sequence(out, scene, frames, args.stages, MAIN_BUFFERS, on_frame=(lambda f: bar.update(1)) if bar else None)
+    if bar:
+        bar.close()
+    if not args.quiet:
+        print(f"wrote {args.output} (frames {frames.start}..{frames.stop - 1}, {scene.render.technique})",
+              file=sys.stderr)
     return 0
 
 
@@ -181,6 +200,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"technique ({techniques}); shortcut for --set render.technique=NAME "
                         "(default: the scene's render.technique, physical when unset)")
     r.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map (default: off)")
+    r.add_argument("--frames", metavar="A:B", help="render frames A..B-1 of the scene's [animation] as numbered "
+                   "EXR sequences (<buffer>.NNNN.exr) plus preview.gif (and preview.mp4 with vlref[video]) "
+                   "(default: one frame, render.frame)")
     r.add_argument("-q", "--quiet", action="store_true", help="no progress bar, notes or summary (default: off)")
     r.set_defaults(func=cmd_render)
 

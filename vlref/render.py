@@ -13,6 +13,10 @@ returns named float buffers; ``RenderResult.buffers`` gathers them under stable 
 =================  ============================================================
 
 With ``stages=True`` the technique's intermediate buffers and every shadow map are added.
+
+Temporal techniques (``froxel`` with ``temporal = true``) read the previous frame's state from
+``render(..., history=)`` and return theirs as ``RenderResult.history`` (None for the others);
+:func:`vlref.animation.render_sequence` chains them over frames.
 """
 
 from __future__ import annotations
@@ -30,6 +34,7 @@ import numpy as np
 
 from . import __version__
 from .camera import Camera, camera_from_settings
+from .scene.animation import scene_at
 from .scene.model import Scene
 
 __all__ = ["Frame", "RenderResult", "render", "prepare_frame", "resolved", "scene_hash", "scene_settings_json"]
@@ -79,7 +84,7 @@ def scene_hash(scene: Scene) -> str:
 class Frame:
     """Everything the volumetric passes of one frame read, built once per render.
 
-    ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
+    ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
     :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
     (:func:`vlref.oracle.port_buffers.port_frame`).
     """
@@ -91,6 +96,7 @@ class Frame:
     lights: Any
     scene_colour: np.ndarray
     shadow_cache: dict = field(default_factory=dict, repr=False)
+    history: Any = field(default=None, repr=False)
 
     def shadow_maps(self, shadow_filter: str | None = None):
         """The lights' shadow maps, built on first use (cascades depend on the camera).
@@ -119,15 +125,18 @@ class RenderResult:
     timings: dict[str, float]
     notes: list[str] = field(default_factory=list)
     """One-line remarks of the technique's ``notes(scene, buffers)`` (source defaults in use, fp16 saturation)."""
+    history: Any = None
 
 
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
-    """Camera, geometry, G-buffer, packed lights and scene colour of ``scene``."""
+    """Camera, geometry, G-buffer, packed lights and scene colour of ``scene`` at its ``render.frame``
+    (:func:`vlref.scene.animation.scene_at`; ``Frame.scene`` is the evaluated scene)."""
     from .geometry import build_geometry, raycast
     from .lights import pack_lights
     from .lights.shading import scene_colour
 
     tick = tick or (lambda name: None)
+    scene = scene_at(scene)
     camera = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
     geometry = build_geometry(scene)
     tick("geometry")
@@ -139,8 +148,9 @@ def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Fr
     return Frame(scene, camera, geometry, gbuffer, lights, colour)
 
 
-def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None) -> RenderResult:
-    """Render ``scene`` with its ``render.technique``; see the module docstring for the buffers."""
+def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None,
+           history: Any = None) -> RenderResult:
+    """Render ``scene`` with its ``render.technique``; see the module docstring for the buffers and ``history``."""
     timings: dict[str, float] = {}
     last = [time.perf_counter()]
 
@@ -152,8 +162,10 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
             progress(name)
 
     frame = prepare_frame(scene, tick)
+    frame.history = history
     technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
-    out = technique.render(scene, frame)
+    out = technique.render(frame.scene, frame)
+    next_history = out.pop("history", None)
     tick("volumetrics")
 
     g = frame.gbuffer
@@ -168,4 +180,4 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}
     notes = technique.notes(scene, out) if hasattr(technique, "notes") else []
-    return RenderResult(buffers, metadata, timings, notes)
+    return RenderResult(buffers, metadata, timings, notes, next_history)

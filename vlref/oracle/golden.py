@@ -17,11 +17,15 @@ fail). Exit 2: bad input (unreadable manifest, unknown option).
 
 Applicability (which techniques render which scene):
 
-* ``physical``, ``killzone``, ``slightlymad``: every scene (they march any light type);
+* ``physical``, ``killzone``, ``slightlymad``, ``froxel``: every scene (they light any light type);
 * ``urp``: scenes with a directional light (the URP tutorial marches the main light only);
 * ``radial``: scenes whose radial light (:func:`vlref.techniques.radial.radial_light`) projects inside
   the frame, in front of the camera: a screen-space radial blur centred off screen (or behind the
   camera, where the technique fades to nothing) tests only its edge clamping.
+
+Animated scenes (an ``[animation]`` table) are rendered only by the suite's ``animation_techniques``,
+one entry per frame of ``animation_frames``, named ``scene@F/technique`` and stored under
+``<technique>/<scene>@F/``.
 """
 
 from __future__ import annotations
@@ -98,11 +102,17 @@ class GoldenSuite:
     preset: str
     buffers: tuple[str, ...]
     techniques: tuple[str, ...]
+    technique_overrides: tuple[tuple[str, tuple[str, ...]], ...] = ()
+    animation_frames: tuple[int, ...] = (0,)
+    animation_techniques: tuple[str, ...] = ()
 
     def as_dict(self) -> dict:
         return {"width": self.width, "height": self.height, "steps": self.steps,
                 "shadow_resolution": self.shadow_resolution, "preset": self.preset,
-                "buffers": list(self.buffers), "techniques": list(self.techniques)}
+                "buffers": list(self.buffers), "techniques": list(self.techniques),
+                "technique_overrides": {t: list(o) for t, o in self.technique_overrides},
+                "animation_frames": list(self.animation_frames),
+                "animation_techniques": list(self.animation_techniques)}
 
 
 @dataclass(frozen=True)
@@ -112,10 +122,13 @@ class Entry:
     scene: str
     technique: str
     overrides: tuple[str, ...]
+    frame: int | None = None
 
     @property
     def name(self) -> str:
-        return f"{self.scene}/{self.technique}"
+        """``scene/technique``; ``scene@frame/technique`` for a frame of an animated scene."""
+        scene = self.scene if self.frame is None else f"{self.scene}@{self.frame}"
+        return f"{scene}/{self.technique}"
 
 
 def load_suite(path=SUITE_FILE) -> GoldenSuite:
@@ -148,7 +161,20 @@ def load_suite(path=SUITE_FILE) -> GoldenSuite:
         raise InputError(str(path), "techniques", f"must name techniques among {', '.join(TECHNIQUES)}, got {bad}")
     if not buffers or not all(isinstance(b, str) and b.isidentifier() for b in buffers):
         raise InputError(str(path), "buffers", f"must be a non-empty list of buffer names, got {list(buffers)}")
-    return GoldenSuite(preset=str(preset), buffers=buffers, techniques=techniques, **ints)
+    extra = data.get("technique_overrides", {})
+    if not isinstance(extra, dict) or any(t not in techniques or not isinstance(o, list)
+                                          or not all(isinstance(x, str) for x in o) for t, o in extra.items()):
+        raise InputError(str(path), "technique_overrides", "must map suite techniques to lists of KEY.PATH=VALUE")
+    frames = data.get("animation_frames", [0])
+    if not isinstance(frames, list) or not frames or not all(
+            isinstance(f, int) and not isinstance(f, bool) and f >= 0 for f in frames):
+        raise InputError(str(path), "animation_frames", f"must be a non-empty list of frames >= 0, got {frames!r}")
+    anim_techniques = data.get("animation_techniques", list(techniques))
+    if not isinstance(anim_techniques, list) or any(t not in techniques for t in anim_techniques):
+        raise InputError(str(path), "animation_techniques", f"must list suite techniques, got {anim_techniques!r}")
+    return GoldenSuite(preset=str(preset), buffers=buffers, techniques=techniques,
+                       technique_overrides=tuple((t, tuple(o)) for t, o in extra.items()),
+                       animation_frames=tuple(frames), animation_techniques=tuple(anim_techniques), **ints)
 
 
 def applies(scene, technique: str) -> bool:
@@ -175,29 +201,42 @@ def _overrides(suite: GoldenSuite, scene, technique: str) -> tuple[str, ...]:
     for i, light in enumerate(scene.lights):
         if light.shadows is not None and light.shadows.resolution > suite.shadow_resolution:
             out.append(f"lights.{i}.shadows.resolution={suite.shadow_resolution}")
+    out += dict(suite.technique_overrides).get(technique, ())
     return tuple(out)
 
 
 def suite_entries(suite: GoldenSuite) -> list[Entry]:
-    """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order."""
+    """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order; an
+    animated scene gets one entry per frame of ``animation_frames`` (``render.frame=F`` appended)."""
     from ..scene import bundled_scenes, load_scene
 
     entries = []
     for name, path in bundled_scenes().items():
         base = load_scene(path, [f"render.width={suite.width}", f"render.height={suite.height}"])
+        animated = base.animation is not None
+        frames = suite.animation_frames if animated else (None,)
         for technique in suite.techniques:
-            if applies(base, technique):
-                entries.append(Entry(name, technique, _overrides(suite, base, technique)))
+            if applies(base, technique) and (not animated or technique in suite.animation_techniques):
+                over = _overrides(suite, base, technique)
+                entries += [Entry(name, technique, over) if f is None else
+                            Entry(name, technique, over + (f"render.frame={f}",), f) for f in frames]
     return entries
 
 
 def render_entry(entry: Entry, buffers: Sequence[str]):
-    """``({buffer: array}, scene)`` of one entry; a buffer the technique lacks is an :class:`InputError`."""
+    """``({buffer: array}, scene)`` of one entry; a buffer the technique lacks is an :class:`InputError`.
+
+    A temporal entry (``froxel`` with ``temporal = true``) at frame F renders frames 0..F in sequence
+    (:func:`vlref.sequence.render_sequence`) and keeps the last."""
     from ..render import render
     from ..scene import load_scene
+    from ..sequence import render_sequence
 
     scene = load_scene(entry.scene, entry.overrides)
-    result = render(scene)
+    if scene.render.technique == "froxel" and scene.techniques.froxel.temporal:
+        result = list(render_sequence(scene, range(scene.render.frame + 1)))[-1][1]
+    else:
+        result = render(scene)
     missing = [b for b in buffers if b not in result.buffers]
     if missing:
         raise InputError(str(SUITE_FILE), "buffers", f"{entry.name} has no buffer(s) {', '.join(missing)}")
@@ -264,7 +303,7 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
                       "settings": json.loads(scene_settings_json(scene)), "preset": suite.preset, "files": {}}
             meta = {"scene_hash": record["scene_hash"], "technique": entry.technique, "golden": entry.name}
             for name, array in buffers.items():
-                rel = f"{entry.technique}/{entry.scene}/{name}.exr"
+                rel = f"{entry.technique}/{entry.name.split('/')[0]}/{name}.exr"
                 (tmp / rel).parent.mkdir(parents=True, exist_ok=True)
                 write_exr(tmp / rel, array, metadata=meta)
                 record["files"][name] = {"path": rel, "sha256": _sha256(tmp / rel)}

@@ -264,6 +264,7 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
 
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
+    scene = frame.scene  # evaluated at render.frame (animated scenes)
     cam = frame.camera
     y0, y1 = rows if rows is not None else (0, scene.render.height)
     dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])

@@ -20,7 +20,7 @@ from .technique_params import TechniqueParams
 
 Vec3 = tuple[float, float, float]
 
-TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial")
+TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial", "froxel")
 SAMPLINGS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 RESOLUTIONS = ("full", "half", "third", "quarter")
 RESOLUTION_DIVISORS = {"full": 1, "half": 2, "third": 3, "quarter": 4}
@@ -51,6 +51,7 @@ class RenderSettings:
     resolution: Optional[str] = F(None, "march resolution relative to the frame (default: the technique's)",
                                   choices=RESOLUTIONS)
     seed: int = F(0, "seed of the hash pattern and of the procedural noise", min=0)
+    frame: int = F(0, "frame index: the [animation] state rendered and the temporal jitter", min=0)
     time: float = F(0.0, "scene time in seconds (animates the noise)")
     max_distance: float = F(100.0, "view rays are cut at this distance (metres)", gt=0.0)
     precision: str = F("float64", "floating-point type of the march", choices=("float64", "float32"))
@@ -245,6 +246,60 @@ class Mesh(_SceneObject):
         return ("path", "missing required key") if not self.path else None
 
 
+@dataclass(frozen=True)
+class CameraKey:
+    position: Optional[Vec3] = F(None, "camera position (linear)")
+    look_at: Optional[Vec3] = F(None, "point looked at (linear; the scene's camera must use look_at)")
+    rotation: Optional[Vec3] = F(None, "Euler angles in degrees (quaternion slerp; the scene's camera must use "
+                                 "rotation or neither)")
+    fov: Optional[float] = F(None, "vertical field of view in degrees (linear)", gt=0.0, lt=180.0)
+
+
+@dataclass(frozen=True)
+class LightKey:
+    light: int = F(doc="index of the light in [[lights]]", min=0)
+    position: Optional[Vec3] = F(None, "world position (linear)")
+    direction: Optional[Vec3] = F(None, "direction of light travel (slerp of the unit vectors)", nonzero=True)
+    color: Optional[Vec3] = F(None, "linear RGB colour (linear)", min=0.0)
+    intensity: Optional[float] = F(None, "intensity (linear)", min=0.0)
+
+
+@dataclass(frozen=True)
+class MediumKey:
+    scattering: Optional[float] = F(None, "sigma_s (1/m, linear)", min=0.0)
+    absorption: Optional[float] = F(None, "sigma_a (1/m, linear)", min=0.0)
+    noise_offset: Optional[float] = F(None, "medium.noise.offset (linear)", min=-1.0, max=1.0)
+    noise_intensity: Optional[float] = F(None, "medium.noise.intensity (linear)", min=0.0)
+
+
+@dataclass(frozen=True)
+class Keyframe:
+    frame: int = F(doc="frame index of this key", min=0)
+    camera: Optional[CameraKey] = F(None, "camera values at this frame")
+    lights: tuple[LightKey, ...] = F(factory=tuple, doc="light values at this frame ([[animation.keys.lights]])")
+    medium: Optional[MediumKey] = F(None, "medium values at this frame")
+
+
+@dataclass(frozen=True)
+class Animation:
+    frames: int = F(8, "sequence length: frames 0 .. frames - 1 (vlref render --frames default)", min=1, max=100000)
+    fps: float = F(24.0, "frames per second: frame f renders at render.time + f / fps (noise scroll)", gt=0.0)
+    keys: tuple[Keyframe, ...] = F(factory=tuple, doc="keyframes ([[animation.keys]]), in increasing frame order")
+
+    def check(self):
+        for i in range(1, len(self.keys)):
+            if not self.keys[i].frame > self.keys[i - 1].frame:
+                return f"keys[{i}].frame", (f"keys must be in increasing frame order: {self.keys[i].frame} after "
+                                            f"{self.keys[i - 1].frame}")
+        for i, key in enumerate(self.keys):
+            seen = set()
+            for j, lk in enumerate(key.lights):
+                if lk.light in seen:
+                    return f"keys[{i}].lights[{j}].light", f"light {lk.light} is keyed twice in this key"
+                seen.add(lk.light)
+        return None
+
+
 SHAPES = {"plane": Plane, "box": Box, "sphere": Sphere, "cylinder": Cylinder, "mesh": Mesh}
 SceneObject = Plane | Box | Sphere | Cylinder | Mesh
 
@@ -259,11 +314,15 @@ class Scene:
     objects: tuple[SceneObject, ...] = F(factory=tuple, doc="objects ([[objects]] tables, tagged by shape)",
                                    union=("shape", SHAPES))
     techniques: TechniqueParams = F(factory=TechniqueParams, doc="per-technique parameters")
+    animation: Optional[Animation] = F(None, "keyframed camera, lights and medium (vlref render --frames)")
     source: str = F("", internal=True)
 
     def check(self):
         if not self.lights:
             return "lights", "a scene needs at least one light"
+        if self.animation is not None:
+            from .animation import check_animation
+            return check_animation(self)
         return None
 
     def replace(self, **changes) -> "Scene":

@@ -175,12 +175,32 @@ class RadialParams:
 
 
 @dataclass(frozen=True)
+class FroxelParams:
+    """Froxel volumetrics: Wronski 2014 (AC4 "Volumetric fog"), Hillaire 2015 (Frostbite); docs/TECHNIQUES.md."""
+
+    grid_width: int = F(160, "froxel columns across the screen (Wronski's AC4 grid: 160x90x64)", min=1, max=1024)
+    grid_height: int = F(90, "froxel rows", min=1, max=1024)
+    slices: int = F(64, "depth slices (AC4, Frostbite: 64)", min=1, max=1024)
+    depth_distribution: float = F(0.9, "slice law: 1 = exponential (Wronski, Hillaire), 0 = uniform; blend between "
+                                  "[U: 0.9 keeps the first metre from taking a third of the slices]", min=0.0, max=1.0)
+    jitter: str = F("halton", "sample offset inside each froxel per frame: halton (2, 3, 5) or none (the centre)",
+                    choices=("halton", "none"))
+    jitter_period: int = F(16, "the Halton index cycles with this period of frames [U]", min=1, max=4096)
+    light_extinction: bool = F(True, "extinction on the light leg (T_l), as the physical march")
+    temporal: bool = F(False, "blend with the previous frame's reprojected grid (sequences: vlref render --frames)")
+    history_alpha: float = F(0.1, "weight of the current frame in the exponential history blend (Unreal's "
+                             "HistoryWeight 0.9; the sources give none [U])", gt=0.0, max=1.0)
+    history_clamp: bool = F(False, "clamp the history to the current 3x3x3 neighbourhood [U: not in the sources]")
+
+
+@dataclass(frozen=True)
 class TechniqueParams:
     physical: PhysicalParams = field(default_factory=PhysicalParams, metadata={"doc": "physical march"})
     killzone: KillzoneParams = field(default_factory=KillzoneParams, metadata={"doc": "thesis / Killzone"})
     slightlymad: SlightlyMadParams = field(default_factory=SlightlyMadParams, metadata={"doc": "VolumetricLights"})
     urp: UrpParams = field(default_factory=UrpParams, metadata={"doc": "URP tutorial"})
     radial: RadialParams = field(default_factory=RadialParams, metadata={"doc": "GPU Gems 3 radial blur"})
+    froxel: FroxelParams = field(default_factory=FroxelParams, metadata={"doc": "froxel grid (Wronski, Hillaire)"})
 
     def of(self, name: str):
         """The parameter block of technique ``name``."""
