@@ -603,6 +603,9 @@ ax.legend()
 plt.show()
 times = list(csv.DictReader((folder / "out" / "timings.csv").read_text().splitlines()))
 print("\\n".join(f"{t['item']:<14s} {float(t['seconds']):.2f} s" for t in times))"""),
+]
+
+
 FROXEL = [
     ("md", """\
 # Froxel volumetrics and temporal reprojection
