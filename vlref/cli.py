@@ -232,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw.add_argument("spec", help="sweep file (TOML): scene, set, techniques, metrics, [grid] or points")
     sw.add_argument("-o", "--output", default="out_sweep", help="output folder (default: out_sweep)")
     add_scheduler_argument(sw)
-    sw.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary")
+    sw.add_argument("-q", "--quiet", action="store_true", help="no progress bar or summary (default: off)")
     sw.set_defaults(func=cmd_sweep)
 
     from .oracle.compare import add_arguments, run_compare
