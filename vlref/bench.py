@@ -10,7 +10,10 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
                   PCF shadows. **Samples** are (pixel, light) pairs whose ray segment inside the light's
                   volume is not empty, times the step count: the work the kernel does.
 ``baseline``      the same computation as (a) in vectorised NumPy (:mod:`vlref.bench_baseline`), its
-                  samples/s, its largest relative difference to the kernel, and the kernel/NumPy ratios.
+                  samples/s, its largest relative difference to the kernel, and the kernel/NumPy ratios;
+                  and :func:`plain_march` (one ``exp``, one ``pow``, one hard shadow lookup per sample, on
+                  (a)'s rays) at the full size on all threads and at the scaling size on one thread, with
+                  the kernel/plain ratios.
 ``scaling``       (a) at 1, 2, 4, 8 and 16 Numba threads (counts above ``NUMBA_NUM_THREADS`` are skipped
                   and listed); speedup and parallel efficiency relative to one thread.
 ``raycast``       the G-buffer (primary rays/s); ``shadow_maps``: the four lights' maps (texels/s), and,
@@ -39,6 +42,7 @@ import argparse
 import dataclasses
 import datetime
 import json
+import math
 import os
 import platform
 import subprocess
@@ -53,6 +57,8 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from .lights.pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY,
+                          F_UZ)
 from .march.physical import light_segment
 from .scene.model import (Box, CameraSettings, Cylinder, HeightFog, Light, Medium, Plane, RenderSettings, Scene,
                           ShadowSettings, Sphere)
@@ -177,6 +183,70 @@ def bench_march(cfg: BenchConfig) -> dict:
     return out
 
 
+@njit(cache=True, fastmath=False, parallel=True)
+def plain_march(origin, dirs, seg, steps, sigma_t, lf, data, base, res, out):
+    """The plain comparison kernel of issue 12 on (a)'s rays and spot light: per sample one ``exp`` (view
+    transmittance ``e^{-σt t}``), one ``pow`` (``d^{-3}``, the shape of HG's denominator) and a hard
+    (nearest-texel) shadow-map lookup; no fog, cone, light leg or phase. ``seg`` (1, H, W, 2) from
+    :func:`vlref.bench_baseline.light_segments`; ``out`` (H, W)."""
+    h, w = out.shape
+    px, py, pz = lf[0, F_PX], lf[0, F_PY], lf[0, F_PZ]
+    th = lf[0, F_TAN_HALF]
+    for p in prange(h * w):
+        i, j = p // w, p % w
+        a, b = seg[0, i, j, 0], seg[0, i, j, 1]
+        acc = 0.0
+        if b > a:
+            dt = (b - a) / steps
+            for s in range(steps):
+                t = a + (s + 0.5) * dt
+                wx = origin[0] + t * dirs[i, j, 0] - px
+                wy = origin[1] + t * dirs[i, j, 1] - py
+                wz = origin[2] + t * dirs[i, j, 2] - pz
+                d2 = wx * wx + wy * wy + wz * wz
+                xl = wx * lf[0, F_RX] + wy * lf[0, F_RY] + wz * lf[0, F_RZ]
+                yl = wx * lf[0, F_UX] + wy * lf[0, F_UY] + wz * lf[0, F_UZ]
+                zl = wx * lf[0, F_DX] + wy * lf[0, F_DY] + wz * lf[0, F_DZ]
+                lit = 1.0
+                if zl > 0.0:
+                    k = 0.5 / (zl * th)
+                    col = min(max(int((0.5 + xl * k) * res), 0), res - 1)
+                    row = min(max(int((0.5 - yl * k) * res), 0), res - 1)
+                    ref = data[base + row * res + col]
+                    lit = 1.0 if d2 <= ref * ref else 0.0
+                acc += math.exp(-sigma_t * t) * lit * d2 ** -1.5 * dt
+        out[i, j] = acc
+
+
+def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict:
+    """Samples/s of :func:`plain_march` on (a) at ``width x height`` with ``threads`` Numba threads."""
+    from .bench_baseline import light_segments
+    from .lights.shadowmaps import S_OFFSET, S_RES
+    from .render import prepare_frame
+
+    scene = bench_scene(width, height, cfg.steps, "one", cfg.shadow_resolution)
+    frame = prepare_frame(scene)
+    sm = frame.shadow_maps()
+    cam = frame.camera
+    dirs = cam.ray_directions()
+    t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
+    lf = frame.lights.floats.astype(np.float64)
+    origin = np.asarray(cam.position, dtype=np.float64)
+    seg = np.empty((1, height, width, 2))
+    light_segments(frame.lights.ints, lf, origin, dirs, t_end, seg)
+    out = np.empty((height, width))
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    try:
+        seconds = _median_time(lambda: plain_march(origin, dirs, seg, cfg.steps, scene.medium.extinction, lf, sm.data,
+                                                   int(sm.ints[0, S_OFFSET]), int(sm.ints[0, S_RES]), out), cfg.repeats)
+    finally:
+        numba.set_num_threads(before)
+    samples = march_samples(scene, frame)
+    return {"width": width, "height": height, "threads": numba.get_num_threads() if threads > 1 else 1,
+            "seconds": seconds, "samples_per_s": samples / seconds}
+
+
 def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
     """The NumPy baseline of (a) at ``cfg.baseline``, checked against the kernel's result (same size)."""
     from .bench_baseline import light_segments, march_spot_numpy
@@ -209,10 +279,15 @@ def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
     samples = march_samples(scene, frame)
     rate = samples / seconds
     one_thread = scaling["threads"].get("1", {}).get("samples_per_s")
+    plain_all = _plain_rate(cfg, cfg.width, cfg.height, numba.get_num_threads())
+    plain_one = _plain_rate(cfg, cfg.small[0], cfg.small[1], 1)
     return {"width": w, "height": h, "steps": cfg.steps, "seconds": seconds, "samples": samples,
             "samples_per_s": rate, "max_abs_diff_relative_to_peak": float(np.abs(got - ref).max()) / scale,
             "ratio_kernel_all_threads": march["one_spot"]["samples_per_s"] / rate,
-            "ratio_kernel_one_thread": (one_thread / rate) if one_thread else None}
+            "ratio_kernel_one_thread": (one_thread / rate) if one_thread else None,
+            "plain_all_threads": plain_all, "plain_one_thread": plain_one,
+            "ratio_kernel_plain_all_threads": march["one_spot"]["samples_per_s"] / plain_all["samples_per_s"],
+            "ratio_kernel_plain_one_thread": (one_thread / plain_one["samples_per_s"]) if one_thread else None}
 
 
 def bench_scaling(cfg: BenchConfig) -> dict:
@@ -479,6 +554,9 @@ def format_report(r: dict) -> str:
     b = r["baseline"]
     lines.append(f"numpy baseline {b['width']}x{b['height']}: {b['samples_per_s'] / 1e6:.3f} M samples/s; kernel/numpy "
                  f"{b['ratio_kernel_all_threads']:.1f}x (all threads), {_fmt(b['ratio_kernel_one_thread'])}x (1 thread)")
+    lines.append(f"plain one-exp kernel: {b['plain_all_threads']['samples_per_s'] / 1e6:.2f} M samples/s (all threads), "
+                 f"{b['plain_one_thread']['samples_per_s'] / 1e6:.2f} (1 thread); kernel/plain "
+                 f"{b['ratio_kernel_plain_all_threads']:.2f}x, {_fmt(b['ratio_kernel_plain_one_thread'])}x")
     for n, s in r["scaling"]["threads"].items():
         lines.append(f"threads {n:>2s}: {s['samples_per_s'] / 1e6:.2f} M samples/s, speedup {s['speedup']:.2f}, "
                      f"efficiency {s['efficiency']:.2f}")

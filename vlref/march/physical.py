@@ -3,8 +3,12 @@
 For each pixel (view ray ``x(t) = o + t d``, ``t ∈ [0, t_end]``, ``t_end = min(scene distance,
 render.max_distance)``) and each light ``l``:
 
-1. the segment ``[a, b]`` of the ray inside the light's volume (:mod:`vlref.march.segments`: ball of
-   radius ``range``, cone ∩ ball, or the whole ray for a directional light);
+1. the segment ``[a, b]`` of the ray where the integrand can be non-zero: inside the light's volume
+   (:mod:`vlref.march.segments`: ball of radius ``range``, cone ∩ ball, or the whole ray for a
+   directional light), clipped to ``medium.bounds`` (:func:`vlref.medium.clip_to_bounds`) and to the
+   scene depth ``t_end`` (issue 12: a light of range 1000 m in an 8 m box otherwise spreads its steps
+   over 1000 m of empty space). The height fog and the noise are positive wherever the medium is, so
+   they clip nothing;
 2. ``N`` steps of ``Δ = (b - a)/N`` with samples at ``t_i = a + (i + β) Δ`` (``β`` the pixel's offset);
 3. per step, with ``σs, σt`` at the sample (:mod:`vlref.medium`):
    ``S = σs · p(d·l) · V · T_l · E_l`` (``p`` HG with ``l`` toward the light, ``V`` shadow visibility,
@@ -56,8 +60,8 @@ from ..numeric import cast
 from ..lights.pack import (F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND)
 from ..lights.shading import light_incidence
 from ..lights.shadowmaps import SHADOW_EXACT, SHADOW_NONE, S_MODE, S_STRENGTH, exact_visibility, map_lit
-from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_FOG, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, density,
-                      fog_depth_ratio, fog_exponent, in_bounds, optical_depth)
+from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_FOG, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, clip_to_bounds,
+                      density, fog_depth_ratio, fog_exponent, in_bounds, optical_depth)
 from ..phase import hg
 from .segments import cone_segment, sphere_segment
 
@@ -173,6 +177,8 @@ def march_physical(origin, dirs, t_end, offsets, steps, mp, lattice, li, lf, coo
                                                       cast(te, 0.0), te, steps))
         for k in range(n):
             a, b = light_segment(li, lf, k, origin[0], origin[1], origin[2], dx, dy, dz, te)
+            if b > a:
+                a, b = clip_to_bounds(mp, origin[0], origin[1], origin[2], dx, dy, dz, a, b)
             if b <= a:
                 per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = cast(te, 0.0)
                 continue
