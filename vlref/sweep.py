@@ -73,17 +73,13 @@ def _strings(value, file: str, key: str) -> tuple[str, ...]:
 
 def load_sweep(path) -> SweepSpec:
     """Read and check a sweep file (module docstring); :class:`InputError` names the bad key."""
-    import tomllib
-
     from .scene.load import parse_override
     from .scene.model import TECHNIQUES
+    from .tomlfile import read_toml
 
     path = Path(path)
     file = str(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(file, "", f"unreadable sweep file ({exc})") from None
+    data = read_toml(path, "sweep file")
     unknown = sorted(set(data) - {"scene", "set", "techniques", "metrics", "rel_tol", "grid", "points"})
     if unknown:
         raise InputError(file, unknown[0], "unknown key (expected scene, set, techniques, metrics, rel_tol, "

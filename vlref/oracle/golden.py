@@ -133,15 +133,11 @@ class Entry:
 
 def load_suite(path=SUITE_FILE) -> GoldenSuite:
     """Read and check a suite file; :class:`InputError` names the bad key."""
-    import tomllib
-
     from ..scene.model import TECHNIQUES
+    from ..tomlfile import read_toml
 
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(str(path), "", f"unreadable suite file ({exc})") from None
+    data = read_toml(path, "suite file")
     ints = {}
     for key in ("width", "height", "steps", "shadow_resolution"):
         value = data.get(key)

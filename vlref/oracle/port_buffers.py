@@ -372,18 +372,12 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
 
     The scene is loaded with the manifest's ``set`` list, then the depth buffer's size, then ``overrides``.
     """
-    import tomllib
-
     from ..scene import load_scene
+    from ..tomlfile import read_toml
 
     path = Path(path)
     file = str(path)
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(file, "", "port manifest not found") from None
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise InputError(file, "", f"unreadable port manifest ({exc})") from None
+    data = read_toml(path, "port manifest")
     base = path.parent
     if "scene" not in data:
         raise InputError(file, "scene", "missing required key")

@@ -18,18 +18,13 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import sys
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
 from typing import Mapping
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
-
 from ..errors import InputError
+from ..tomlfile import loads as toml_loads
 
 __all__ = ["Tolerance", "SCALES", "load_presets", "tolerance", "PRESETS_FILE"]
 
@@ -95,7 +90,7 @@ def _coerce(key: str, value) -> object:
 def load_presets() -> dict[str, Tolerance]:
     """All presets of the data file, by name."""
     text = resources.files("vlref").joinpath(PRESETS_FILE).read_text(encoding="utf-8")
-    table = tomllib.loads(text)
+    table = toml_loads(text)
     out = {}
     for name, knobs in table.items():
         values = {k: _coerce(k, v) for k, v in knobs.items()}

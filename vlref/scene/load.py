@@ -8,16 +8,11 @@ from __future__ import annotations
 
 import copy
 import json
-import sys
 from pathlib import Path
 from typing import Any, Iterable
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover - exercised on 3.10 only
-    import tomli as tomllib
-
 from ..errors import InputError
+from ..tomlfile import TOMLDecodeError, loads as toml_loads
 from .bundled import find_bundled
 from .model import Scene
 from .schema import build, join_path
@@ -73,8 +68,8 @@ def parse_scene(text: str, file: str) -> dict:
             raise InputError(file, f"line {exc.lineno}", f"invalid JSON: {exc.msg}") from None
     else:
         try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
+            data = toml_loads(text)
+        except TOMLDecodeError as exc:
             raise InputError(file, "", f"invalid TOML: {exc}") from None
     if not isinstance(data, dict):
         raise InputError(file, "", "the top level must be a table")
@@ -90,8 +85,8 @@ def parse_override(text: str) -> tuple[list[str | int], Any]:
     if not key.strip() or any(p == "" for p in parts):
         raise InputError(CLI, f"--set {text}", "empty key")
     try:
-        value = tomllib.loads(f"v = {raw}")["v"]
-    except tomllib.TOMLDecodeError:
+        value = toml_loads(f"v = {raw}")["v"]
+    except TOMLDecodeError:
         value = raw
     return parts, value
 
