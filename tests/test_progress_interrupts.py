@@ -1,0 +1,112 @@
+"""Progress band by band and clean interrupts (issue 15).
+
+* The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
+  bands change no bit of a result.
+* SIGINT / SIGTERM during ``vlref render``: one line ``vlref: interrupted``, exit 130 / 143, no traceback,
+  no output folder and no temporary file or folder left behind.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vlref import progress
+from vlref.progress import reporting, row_bands
+from vlref.reference import render_reference
+from vlref.render import render
+from vlref.scene import load_scene
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
+    for height, bands in ((1, 64), (7, 3), (90, 64), (1000, 64), (5, 1)):
+        calls = []
+        with reporting(lambda done, total: calls.append((done, total))):
+            got = list(row_bands(height, bands))
+        assert got[0][0] == 0 and got[-1][1] == height
+        assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
+        sizes = [y1 - y0 for y0, y1 in got]
+        assert len(got) == min(height, bands) and min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
+        assert calls == [(y1, height) for _, y1 in got]
+
+
+def test_the_march_reports_progress_band_by_band():
+    """A render whose march lasts long enough to show a bar moves it at least 10 times, rows increasing."""
+    scene = load_scene("pillars", ["render.width=160", "render.height=90", "render.steps=16"])
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render(scene)
+    assert len(calls) >= 10
+    assert all(total == 90 for _, total in calls) and calls[-1] == (90, 90)
+    assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_the_reference_reports_progress_band_by_band():
+    scene = load_scene("pillars", ["render.width=12", "render.height=10"])
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render_reference(scene, rel_tol=1e-2, shadow_samples=16)
+    assert calls == [(y, 10) for y in range(1, 11)]
+
+
+@pytest.mark.parametrize("technique", ["physical", "reference"])
+def test_bands_change_no_bit(monkeypatch, technique):
+    scene = load_scene("coloured_lights", ["render.width=24", "render.height=14", "render.steps=6"])
+    runs = []
+    for bands in (1, 5):
+        monkeypatch.setattr(progress, "BANDS", bands)
+        if technique == "reference":
+            res = render_reference(scene, rel_tol=1e-2, shadow_samples=16)
+            runs.append({"inscatter": res.inscatter, "transmittance": res.transmittance, "error": res.error})
+        else:
+            runs.append(render(scene, stages=True).buffers)
+    for name in runs[0]:
+        assert np.array_equal(runs[0][name], runs[1][name], equal_nan=True), name
+
+
+def _stderr_reader(proc):
+    """Collect the child's stderr (tqdm writes without newlines) in a background thread."""
+    chunks = []
+
+    def read():
+        for chunk in iter(lambda: os.read(proc.stderr.fileno(), 4096), b""):
+            chunks.append(chunk)
+
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    return chunks, thread
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
+    work = tmp_path / "work"
+    work.mkdir()
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p))
+    # A render of several seconds; the bar appears once it has run for about a second: then signal it.
+    proc = subprocess.Popen([sys.executable, "-m", "vlref", "render", "pillars", "-o", str(work / "out"),
+                             "--set", "render.steps=2048"], cwd=work, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    chunks, reader = _stderr_reader(proc)
+    deadline = time.monotonic() + 300  # a cold Numba cache compiles first
+    while b"render pillars" not in b"".join(chunks) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the render ended before it could be interrupted"
+    proc.send_signal(sig)
+    try:
+        rc = proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    reader.join(timeout=10)
+    err = b"".join(chunks).decode(errors="replace")
+    assert rc == code
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.replace("\r", "\n").rstrip().splitlines()[-1].strip() == "vlref: interrupted"
+    assert sorted(p.name for p in work.iterdir()) == []  # no output folder, no .out.*.partial, no temp file
