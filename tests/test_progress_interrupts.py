@@ -17,13 +17,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import vlref
 from vlref import progress
 from vlref.progress import reporting, row_bands
 from vlref.reference import render_reference
 from vlref.render import render
 from vlref.scene import load_scene
 
-ROOT = Path(__file__).resolve().parents[1]
+# The child processes import the vlref this process imported (the installed one in CI: its kernels are cached).
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(Path(vlref.__file__).resolve().parents[1]),
+                                                               os.environ.get("PYTHONPATH")) if p))
 
 
 def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
@@ -89,10 +92,9 @@ def _stderr_reader(proc):
 def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
     work = tmp_path / "work"
     work.mkdir()
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p))
     # A render of several seconds; the bar appears once it has run for about a second: then signal it.
     proc = subprocess.Popen([sys.executable, "-m", "vlref", "render", "pillars", "-o", str(work / "out"),
-                             "--set", "render.steps=2048"], cwd=work, env=env, stdout=subprocess.PIPE,
+                             "--set", "render.steps=2048"], cwd=work, env=ENV, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE)
     chunks, reader = _stderr_reader(proc)
     deadline = time.monotonic() + 300  # a cold Numba cache compiles first
@@ -110,3 +112,24 @@ def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
     assert "Traceback" not in err and "KeyboardInterrupt" not in err
     assert err.replace("\r", "\n").rstrip().splitlines()[-1].strip() == "vlref: interrupted"
     assert sorted(p.name for p in work.iterdir()) == []  # no output folder, no .out.*.partial, no temp file
+
+
+def test_warmup_covers_every_technique_and_precision():
+    from vlref.scene.model import TECHNIQUES
+    from vlref.warmup import TASKS
+
+    rendered = {tuple(overrides) for what, overrides in TASKS.values() if what == "render"}
+    for technique in TECHNIQUES:
+        assert any(f'render.technique="{technique}"' in o for o in rendered), technique
+    assert any('render.precision="float32"' in o for o in rendered)
+    assert {what for what, _ in TASKS.values()} == {"frame", "render", "reference"}
+
+
+def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
+    """With the cache filled (CI runs ``vlref warmup`` before the tests) this only loads the kernels."""
+    proc = subprocess.run([sys.executable, "-m", "vlref", "warmup", "--jobs", "2"], cwd=tmp_path, env=ENV,
+                          capture_output=True, text=True, timeout=1200)
+    assert proc.returncode == 0, proc.stderr
+    last = proc.stderr.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("vlref warmup: 8 kernel groups compiled or loaded in ") and " s (cache: " in last
+    assert list(tmp_path.iterdir()) == []

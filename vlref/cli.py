@@ -142,6 +142,7 @@ PASSTHROUGH = {
     "golden": (_passthrough("oracle.golden", "main_golden"), "build or verify the golden suite"),
     "march": (_passthrough("oracle.port_buffers", "main_march"), "march and post passes on a port's own buffers"),
     "bench": (_passthrough("bench", "main_bench"), "benchmarks (--quick, --json)"),
+    "warmup": (_passthrough("warmup", "main_warmup"), "compile every kernel once (later first renders start at once)"),
 }
 
 
