@@ -42,14 +42,24 @@ def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
 
 
 def test_the_march_reports_progress_band_by_band():
-    """A render whose march lasts long enough to show a bar moves it at least 10 times, rows increasing."""
-    scene = load_scene("pillars", ["render.width=160", "render.height=90", "render.steps=16"])
+    """A march long enough to show a bar (11.5 M samples: about a second on 2 cores) moves it at least 10
+    times, rows increasing; bands follow the work (``SAMPLES_PER_BAND``), not the clock."""
+    from vlref.techniques.physical import SAMPLES_PER_BAND
+
+    scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=200"])
     calls = []
     with reporting(lambda done, total: calls.append((done, total))):
         render(scene)
-    assert len(calls) >= 10
-    assert all(total == 90 for _, total in calls) and calls[-1] == (90, 90)
+    assert len(calls) == progress.bands_for(320 * 180 * 200, SAMPLES_PER_BAND) >= 10
+    assert all(total == 180 for _, total in calls) and calls[-1] == (180, 180)
     assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_a_small_march_runs_in_one_band():
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render(load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"]))
+    assert calls == [(18, 18)]
 
 
 def test_the_reference_reports_progress_band_by_band():
@@ -63,9 +73,12 @@ def test_the_reference_reports_progress_band_by_band():
 @pytest.mark.parametrize("technique", ["physical", "reference"])
 def test_bands_change_no_bit(monkeypatch, technique):
     scene = load_scene("coloured_lights", ["render.width=24", "render.height=14", "render.steps=6"])
+    from vlref.techniques import physical
+
     runs = []
     for bands in (1, 5):
         monkeypatch.setattr(progress, "BANDS", bands)
+        monkeypatch.setattr(physical, "SAMPLES_PER_BAND", 1)  # as many bands as BANDS allows
         if technique == "reference":
             res = render_reference(scene, rel_tol=1e-2, shadow_samples=16)
             runs.append({"inscatter": res.inscatter, "transmittance": res.transmittance, "error": res.error})
@@ -118,11 +131,11 @@ def test_warmup_covers_every_technique_and_precision():
     from vlref.scene.model import TECHNIQUES
     from vlref.warmup import TASKS
 
-    rendered = {tuple(overrides) for what, overrides in TASKS.values() if what == "render"}
+    rendered = {tuple(overrides) for what, _, overrides in TASKS.values() if what == "render"}
     for technique in TECHNIQUES:
         assert any(f'render.technique="{technique}"' in o for o in rendered), technique
     assert any('render.precision="float32"' in o for o in rendered)
-    assert {what for what, _ in TASKS.values()} == {"frame", "render", "reference"}
+    assert {what for what, _, _ in TASKS.values()} == {"frame", "render", "reference"}
 
 
 def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
@@ -133,3 +146,24 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     last = proc.stderr.replace("\r", "\n").strip().splitlines()[-1]
     assert last.startswith("vlref warmup: 8 kernel groups compiled or loaded in ") and " s (cache: " in last
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("scene_name, extra", [
+    ("pillars", []),
+    ("colonnade", []),  # an OBJ mesh: a non-empty triangle BVH
+    ("stained_glass", []),  # transparent tinted occluders: shadow-map tints
+    ("slightlymad_spot", ['render.technique="physical"']),  # density noise
+    ("pillars", ['render.precision="float32"']),
+])
+def test_the_kernel_frame_compiles_the_march_the_real_frame_calls(scene_name, extra):
+    """``vlref render`` compiles the march ahead on a 1×1 frame with no objects and no shadow maps: it
+    must have exactly the types of the real frame's call, or the real render would compile again."""
+    from vlref.march.physical import march_physical
+    from vlref.warmup import compile_march, march_cached
+
+    scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
+    render(scene)
+    called = set(march_physical.signatures)
+    compile_march(scene)
+    assert set(march_physical.signatures) == called
+    assert march_cached(scene)  # cache=True wrote it; the render command then skips the second process

@@ -78,9 +78,17 @@ def cmd_render(args) -> int:
     from .io import output_dir, save_render
     from .render import render
 
+    from .warmup import march_ahead
+
     scene = _load(args)
-    with _Bar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar:  # 4 render stages, then the files
-        result = render(scene, stages=args.stages, progress=bar.stage)
+    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
+    with _Bar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+        def stage(name: str) -> None:
+            if name == "shading":  # the frame is done: the march comes next
+                march_ready()
+            bar.stage(name)
+
+        result = render(scene, stages=args.stages, progress=stage)
         with output_dir(args.output) as out:
             save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=scene.render.exposure)
     if not args.quiet:

@@ -14,12 +14,14 @@ from __future__ import annotations
 
 import contextlib
 import contextvars
+import math
 from typing import Callable, Iterator
 
-__all__ = ["BANDS", "row_bands", "reporting"]
+__all__ = ["BANDS", "bands_for", "row_bands", "reporting"]
 
-# Bands per kernel call: smooth enough for a bar (about 1.5 % each), coarse enough that the extra
-# kernel launches (tens of microseconds each) are lost in the work.
+# At most this many bands per kernel call (about 1.5 % of the frame each). Each band is one parallel
+# launch, whose end waits for every thread: tens of microseconds on an idle machine, but a few
+# milliseconds where other processes hold the cores, so callers size bands by their work (bands_for).
 BANDS = 64
 
 _listener: contextvars.ContextVar[Callable[[int, int], None] | None] = contextvars.ContextVar(
@@ -34,6 +36,12 @@ def reporting(listener: Callable[[int, int], None]) -> Iterator[None]:
         yield
     finally:
         _listener.reset(token)
+
+
+def bands_for(work: float, per_band: float) -> int:
+    """``ceil(work / per_band)`` bands, at least 1 and at most :data:`BANDS` (``row_bands`` also caps
+    them at the row count)."""
+    return int(min(BANDS, max(1, math.ceil(work / per_band))))
 
 
 def row_bands(height: int, bands: int | None = None) -> Iterator[tuple[int, int]]:
