@@ -14,6 +14,8 @@ The package is laid out as the pipeline it computes::
     oracle/     image comparison, tolerance presets, golden suite
     io.py       EXR / PNG / NPY / NPZ
     cli.py      the ``vlref`` command
+    progress.py long kernels run band by band of rows: progress reports, Ctrl-C between bands
+    warmup.py   ``vlref warmup`` (compile every kernel once) and the march compiled ahead of a cold render
 """
 
 __version__ = "0.1.0"

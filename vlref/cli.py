@@ -1,13 +1,17 @@
 """The ``vlref`` command.
 
 Exit codes: 0 success (``compare``: pass), 1 ``compare``/``golden verify`` failed, 2 bad input
-(the message names the file, the field and the reason, and nothing is written).
+(the message names the file, the field and the reason, and nothing is written), 130 / 143 interrupted
+by SIGINT (Ctrl-C) / SIGTERM (one line ``vlref: interrupted``, nothing partial left behind).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+import threading
 from pathlib import Path
 
 from . import __version__
@@ -18,12 +22,49 @@ from .errors import InputError
 MAIN_BUFFERS = ("final", "depth", "inscatter", "transmittance")
 
 
-def _progress(quiet: bool, total: int, desc: str):
-    """A tqdm bar on stderr shown only for work longer than about a second; None when quiet."""
-    if quiet:
-        return None
-    from tqdm import tqdm
-    return tqdm(total=total, desc=desc, unit="pass", file=sys.stderr, delay=1.0, leave=False)
+class _Bar:
+    """Progress on stderr: a tqdm bar over a command's stages, then over the rows of each banded kernel.
+
+    ``stage(name)`` completes a stage; ``rows(done, total)`` (a :mod:`vlref.progress` listener) counts
+    the rows of a long kernel (the march, the quadrature), so the bar moves on long work and its time
+    estimate is the kernel's. Each bar shows only once its work has lasted about a second. Quiet: none.
+    """
+
+    def __init__(self, quiet: bool, stages: int, desc: str):
+        self.quiet, self.stages, self.desc, self.done = quiet, stages, desc, 0
+        self.bar = None
+
+    def _show(self, n: int, total: int, unit: str, desc: str) -> None:
+        if self.quiet:
+            return
+        if self.bar is None or self.bar.unit != unit or self.bar.total != total:
+            from tqdm import tqdm
+            self.close()
+            self.bar = tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, delay=1.0, leave=False)
+        self.bar.update(n - self.bar.n)
+
+    def stage(self, name: str | None = None) -> None:
+        self.done += 1
+        self._show(self.done, self.stages, "stage", self.desc)
+
+    def rows(self, done: int, total: int) -> None:
+        self._show(done, total, "row", f"{self.desc}, stage {self.done + 1}/{self.stages}")
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+    def __enter__(self):
+        from .progress import reporting
+        self._reporting = reporting(self.rows)
+        self._reporting.__enter__()
+        self._show(0, self.stages, "stage", self.desc)
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._reporting.__exit__(*exc)
+        self.close()
 
 
 def _load(args):
@@ -64,16 +105,22 @@ def cmd_render(args) -> int:
     from .io import output_dir, save_render
     from .render import render
 
+    from .warmup import march_ahead
+
     scene = _load(args)
     if args.frames is not None:
         return _render_frames(args, scene)
-    bar = _progress(args.quiet, 5, f"render {Path(scene.source).stem}")
-    result = render(scene, stages=args.stages, progress=(lambda name: bar.update(1)) if bar else None)
-    exposure, png_meta, phrase = _preview_exposure(scene, result.buffers["final"])
-    with output_dir(args.output) as out:
-        save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
-    if bar:
-        bar.close()
+    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
+    with _Bar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+        def stage(name: str) -> None:
+            if name == "shading":  # the frame is done: the march comes next
+                march_ready()
+            bar.stage(name)
+
+        result = render(scene, stages=args.stages, progress=stage)
+        exposure, png_meta, phrase = _preview_exposure(scene, result.buffers["final"])
+        with output_dir(args.output) as out:
+            save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
     if not args.quiet:
         for note in result.notes:
             print(f"vlref: note: {note}", file=sys.stderr)
@@ -89,11 +136,9 @@ def _render_frames(args, scene) -> int:
     from .sequence import parse_frames, write_sequence
 
     frames = parse_frames(args.frames, scene)
-    bar = _progress(args.quiet, len(frames), f"render {Path(scene.source).stem} frames")
-    with output_dir(args.output) as out:
-        write_sequence(out, scene, frames, args.stages, MAIN_BUFFERS, on_frame=(lambda f: bar.update(1)) if bar else None)
-    if bar:
-        bar.close()
+    with _Bar(args.quiet, len(frames), f"render {Path(scene.source).stem} frames") as bar, \
+            output_dir(args.output) as out:
+        write_sequence(out, scene, frames, args.stages, MAIN_BUFFERS, on_frame=lambda f: bar.stage())
     if not args.quiet:
         print(f"wrote {args.output} (frames {frames.start}..{frames.stop - 1}, {scene.render.technique})",
               file=sys.stderr)
@@ -113,11 +158,12 @@ def cmd_reference(args) -> int:
     from .render import scene_hash
 
     scene = _load(args)
-    if args.scheduler:
+    if args.scheduler:  # the cluster's own bar counts the tiles
         from .reference.tiles import render_reference_tiled
         res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows)
     else:
-        res = render_reference(scene, rel_tol=args.rel_tol)
+        with _Bar(False, 4, f"reference {Path(scene.source).stem}") as bar:  # 3 frame stages, then the quadrature
+            res = render_reference(scene, rel_tol=args.rel_tol, progress=bar.stage)
     meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol)}
     exposure, png_meta, phrase = _preview_exposure(scene, res.final)
     with output_dir(args.output) as out:
@@ -168,12 +214,14 @@ PASSTHROUGH = {
     "golden": (_passthrough("oracle.golden", "main_golden"), "build or verify the golden suite"),
     "march": (_passthrough("oracle.port_buffers", "main_march"), "march and post passes on a port's own buffers"),
     "bench": (_passthrough("bench", "main_bench"), "benchmarks (--quick, --json)"),
+    "warmup": (_passthrough("warmup", "main_warmup"), "compile every kernel once (later first renders start at once)"),
 }
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vlref", description="vlref: a CPU reference renderer for real-time "
-                                "volumetric lighting (god rays). Exit codes: 0 ok, 1 compare/verify failed, 2 bad input.")
+                                "volumetric lighting (god rays). Exit codes: 0 ok, 1 compare/verify failed, 2 bad input, "
+                                "130/143 interrupted (Ctrl-C / SIGTERM).")
     p.add_argument("--version", action="version", version=f"vlref {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
 
@@ -245,8 +293,48 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+class Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT (Ctrl-C) or SIGTERM while a ``vlref`` command runs."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_interrupted(signum, frame):
+    # Further signals are ignored from here on, so the clean-up the exception unwinds through (temporary
+    # files and folders of vlref.io) runs to its end.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def _interruptible():
+    """SIGINT and SIGTERM raise :class:`Interrupted` inside the block (main thread only); handlers restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 def main(argv: list[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
+    """Run a command. Ctrl-C or SIGTERM: one line ``vlref: interrupted``, exit 130 / 143 (128 + signal),
+    no partial output (files are written atomically, folders all or nothing: :mod:`vlref.io`)."""
+    with _interruptible():
+        try:
+            return _run(list(sys.argv[1:] if argv is None else argv))
+        except KeyboardInterrupt as exc:
+            print("vlref: interrupted", file=sys.stderr)
+            return 128 + int(getattr(exc, "signum", signal.SIGINT))
+
+
+def _run(argv: list[str]) -> int:
     try:
         if argv and argv[0] in PASSTHROUGH:
             return PASSTHROUGH[argv[0]][0](argv[1:])

@@ -47,6 +47,7 @@ from numba import njit, prange
 
 from . import integrand as ig
 from .integrand import WG, WGK, XGK
+from ..progress import row_bands
 
 __all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL"]
 
@@ -271,9 +272,13 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
     t_end = np.minimum(surface, scene.render.max_distance)
     ctx = ig.build_context(scene, frame)
-    inscatter, trans, err, used, ok, edges = _reference_kernel(
-        np.asarray(cam.position, dtype=np.float64), dirs, t_end, ctx[0], ctx[1:6], ctx[6:], float(rel_tol), float(abs_tol),
-        int(shadow_samples), int(max_intervals), ig.max_split_points(ctx, shadow_samples))
+    origin = np.asarray(cam.position, dtype=np.float64)
+    max_splits = ig.max_split_points(ctx, shadow_samples)
+    # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); pixels are independent
+    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], ctx[0], ctx[1:6], ctx[6:], float(rel_tol),
+                               float(abs_tol), int(shadow_samples), int(max_intervals), max_splits)
+             for y0, y1 in row_bands(t_end.shape[0])]
+    inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
     if progress is not None:
         progress("reference")
     final = trans[..., None] * frame.scene_colour[y0:y1] + inscatter

@@ -1,0 +1,169 @@
+"""Progress band by band and clean interrupts (issue 15).
+
+* The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
+  bands change no bit of a result.
+* SIGINT / SIGTERM during ``vlref render``: one line ``vlref: interrupted``, exit 130 / 143, no traceback,
+  no output folder and no temporary file or folder left behind.
+"""
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import vlref
+from vlref import progress
+from vlref.progress import reporting, row_bands
+from vlref.reference import render_reference
+from vlref.render import render
+from vlref.scene import load_scene
+
+# The child processes import the vlref this process imported (the installed one in CI: its kernels are cached).
+ENV = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in (str(Path(vlref.__file__).resolve().parents[1]),
+                                                               os.environ.get("PYTHONPATH")) if p))
+
+
+def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
+    for height, bands in ((1, 64), (7, 3), (90, 64), (1000, 64), (5, 1)):
+        calls = []
+        with reporting(lambda done, total: calls.append((done, total))):
+            got = list(row_bands(height, bands))
+        assert got[0][0] == 0 and got[-1][1] == height
+        assert all(a[1] == b[0] for a, b in zip(got, got[1:]))
+        sizes = [y1 - y0 for y0, y1 in got]
+        assert len(got) == min(height, bands) and min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
+        assert calls == [(y1, height) for _, y1 in got]
+
+
+def test_the_march_reports_progress_band_by_band():
+    """A march long enough to show a bar (11.5 M samples: about a second on 2 cores) moves it at least 10
+    times, rows increasing; bands follow the work (``SAMPLES_PER_BAND``), not the clock."""
+    from vlref.techniques.physical import SAMPLES_PER_BAND
+
+    scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=200"])
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render(scene)
+    assert len(calls) == progress.bands_for(320 * 180 * 200, SAMPLES_PER_BAND) >= 10
+    assert all(total == 180 for _, total in calls) and calls[-1] == (180, 180)
+    assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+
+
+def test_a_small_march_runs_in_one_band():
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render(load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"]))
+    assert calls == [(18, 18)]
+
+
+def test_the_reference_reports_progress_band_by_band():
+    scene = load_scene("pillars", ["render.width=12", "render.height=10"])
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render_reference(scene, rel_tol=1e-2, shadow_samples=16)
+    assert calls == [(y, 10) for y in range(1, 11)]
+
+
+@pytest.mark.parametrize("technique", ["physical", "reference"])
+def test_bands_change_no_bit(monkeypatch, technique):
+    scene = load_scene("coloured_lights", ["render.width=24", "render.height=14", "render.steps=6"])
+    from vlref.techniques import physical
+
+    runs = []
+    for bands in (1, 5):
+        monkeypatch.setattr(progress, "BANDS", bands)
+        monkeypatch.setattr(physical, "SAMPLES_PER_BAND", 1)  # as many bands as BANDS allows
+        if technique == "reference":
+            res = render_reference(scene, rel_tol=1e-2, shadow_samples=16)
+            runs.append({"inscatter": res.inscatter, "transmittance": res.transmittance, "error": res.error})
+        else:
+            runs.append(render(scene, stages=True).buffers)
+    for name in runs[0]:
+        assert np.array_equal(runs[0][name], runs[1][name], equal_nan=True), name
+
+
+def _stderr_reader(proc):
+    """Collect the child's stderr (tqdm writes without newlines) in a background thread."""
+    chunks = []
+
+    def read():
+        for chunk in iter(lambda: os.read(proc.stderr.fileno(), 4096), b""):
+            chunks.append(chunk)
+
+    thread = threading.Thread(target=read, daemon=True)
+    thread.start()
+    return chunks, thread
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
+    work = tmp_path / "work"
+    work.mkdir()
+    # A render of several seconds; the bar appears once it has run for about a second: then signal it.
+    proc = subprocess.Popen([sys.executable, "-m", "vlref", "render", "pillars", "-o", str(work / "out"),
+                             "--set", "render.steps=2048"], cwd=work, env=ENV, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE)
+    chunks, reader = _stderr_reader(proc)
+    deadline = time.monotonic() + 300  # a cold Numba cache compiles first
+    while b"render pillars" not in b"".join(chunks) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert proc.poll() is None, "the render ended before it could be interrupted"
+    proc.send_signal(sig)
+    try:
+        rc = proc.wait(timeout=120)
+    finally:
+        proc.kill()
+    reader.join(timeout=10)
+    err = b"".join(chunks).decode(errors="replace")
+    assert rc == code
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err
+    assert err.replace("\r", "\n").rstrip().splitlines()[-1].strip() == "vlref: interrupted"
+    assert sorted(p.name for p in work.iterdir()) == []  # no output folder, no .out.*.partial, no temp file
+
+
+def test_warmup_covers_every_technique_and_precision():
+    from vlref.scene.model import TECHNIQUES
+    from vlref.warmup import TASKS
+
+    rendered = {tuple(overrides) for what, _, overrides in TASKS.values() if what == "render"}
+    for technique in TECHNIQUES:
+        assert any(f'render.technique="{technique}"' in o for o in rendered), technique
+    assert any('render.precision="float32"' in o for o in rendered)
+    assert {what for what, _, _ in TASKS.values()} == {"frame", "render", "reference"}
+
+
+def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
+    """With the cache filled (CI runs ``vlref warmup`` before the tests) this only loads the kernels."""
+    proc = subprocess.run([sys.executable, "-m", "vlref", "warmup", "--jobs", "2"], cwd=tmp_path, env=ENV,
+                          capture_output=True, text=True, timeout=1200)
+    assert proc.returncode == 0, proc.stderr
+    last = proc.stderr.replace("\r", "\n").strip().splitlines()[-1]
+    assert last.startswith("vlref warmup: 8 kernel groups compiled or loaded in ") and " s (cache: " in last
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("scene_name, extra", [
+    ("pillars", []),
+    ("colonnade", []),  # an OBJ mesh: a non-empty triangle BVH
+    ("stained_glass", []),  # transparent tinted occluders: shadow-map tints
+    ("slightlymad_spot", ['render.technique="physical"']),  # density noise
+    ("pillars", ['render.precision="float32"']),
+])
+def test_the_kernel_frame_compiles_the_march_the_real_frame_calls(scene_name, extra):
+    """``vlref render`` compiles the march ahead on a 1×1 frame with no objects and no shadow maps: it
+    must have exactly the types of the real frame's call, or the real render would compile again."""
+    from vlref.march.physical import march_physical
+    from vlref.warmup import compile_march, march_cached
+
+    scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
+    render(scene)
+    called = set(march_physical.signatures)
+    compile_march(scene)
+    assert set(march_physical.signatures) == called
+    assert march_cached(scene)  # cache=True wrote it; the render command then skips the second process

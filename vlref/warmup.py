@@ -1,0 +1,205 @@
+"""``vlref warmup``: compile every kernel once into Numba's cache, so that later commands start at once.
+
+Numba compiles a kernel on its first call and keeps the machine code in its cache (``cache=True``:
+``__pycache__`` beside the sources, or ``$NUMBA_CACHE_DIR``); a process that finds it there loads it in
+milliseconds. The first render after an install therefore pays for compiling the kernels it uses.
+``vlref warmup`` pays that once, for every kernel, by rendering a tiny frame of the default scene with
+each technique and precision and solving a tiny reference:
+
+1. ``frame``: geometry, BVH build, G-buffer ray cast, surface shading and shadow maps (every later
+   task needs a frame, so this one runs first, alone);
+2. then, in ``jobs`` worker processes at once (compiling is single-threaded, so a 2-core machine
+   compiles two groups at a time): each technique's passes (``physical`` in float64 and float32) and
+   the quadrature reference.
+
+A task that finds its kernels cached only loads them: a second ``vlref warmup`` takes seconds.
+
+Without a warm-up, ``vlref render`` of the ``physical`` technique overlaps the two halves of its
+compile (:func:`march_ahead`): while the main process compiles the frame kernels (BVH build, ray
+cast, shading, shadow maps), a second process compiles the march kernel for the scene's types on a
+1×1 frame that needs none of them (no objects, no shadow maps: the same array types, empty), and the
+main process picks the result up from the cache when it reaches the march.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import multiprocessing
+import os
+import signal
+import sys
+import time
+from typing import Callable, Iterator
+
+import numpy as np
+
+__all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "march_cached"]
+
+TINY = ["render.width=16", "render.height=9", "render.steps=2"]
+# name -> (what runs, bundled scene (None: the default), overrides at TINY size); see the module docstring
+TASKS: dict[str, tuple[str, str | None, list[str]]] = {
+    "frame": ("frame", None, []),
+    "physical float64": ("render", None, ['render.technique="physical"']),
+    "physical float32": ("render", None, ['render.technique="physical"', 'render.precision="float32"']),
+    "killzone": ("render", None, ['render.technique="killzone"']),
+    "slightlymad": ("render", None, ['render.technique="slightlymad"']),
+    "urp": ("render", "urp_sun", ['render.technique="urp"']),  # URP needs a directional main light
+    "radial": ("render", None, ['render.technique="radial"']),
+    "reference": ("reference", None, ["render.width=4", "render.height=3"]),
+}
+
+
+def run_task(name: str) -> tuple[str, float]:
+    """Compile (or load) the kernels of task ``name`` in this process; ``(name, seconds)``. A failure is
+    raised as ``RuntimeError(message)`` (worker results must unpickle in the parent)."""
+    from .scene import load_scene
+
+    start = time.perf_counter()
+    what, scene_name, overrides = TASKS[name]
+    try:
+        scene = load_scene(scene_name, TINY + overrides)
+        if what == "frame":
+            from .render import prepare_frame
+            prepare_frame(scene).shadow_maps()
+        elif what == "reference":
+            from .reference import render_reference
+            render_reference(scene, rel_tol=1e-2, shadow_samples=8)
+        else:
+            from .render import render
+            render(scene)
+    except Exception as exc:
+        raise RuntimeError(f"warmup task {name!r}: {exc}") from None
+    return name, time.perf_counter() - start
+
+
+@contextlib.contextmanager
+def _spawn_ignoring_sigint() -> Iterator[multiprocessing.context.SpawnContext]:
+    """A spawn context whose processes, started inside the block, ignore SIGINT from their first instruction
+    (an ignored signal stays ignored across exec, and Python then installs no KeyboardInterrupt handler):
+    Ctrl-C reaches the whole process group, and the parent alone handles it (it terminates them)."""
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals are the main thread's business
+        previous = None
+    try:
+        yield multiprocessing.get_context("spawn")
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGINT, previous)
+
+
+def warmup(jobs: int | None = None, progress=None) -> dict[str, float]:
+    """Run every task of :data:`TASKS` (``frame`` first, the rest on ``jobs`` processes, default: the
+    available cores); ``progress(name)`` after each. Returns ``{task: seconds in its process}``."""
+    if not jobs:
+        jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    progress = progress or (lambda name: None)
+    times = {}
+    # spawn: a fresh interpreter per worker (no forked Numba thread pool), compiled code shared via the cache
+    with _spawn_ignoring_sigint() as ctx:
+        pool = ctx.Pool(max(1, min(jobs, len(TASKS) - 1)))
+    with pool:  # terminated on exit, also on an interrupt
+        for name, seconds in pool.imap_unordered(run_task, ["frame"]):
+            times[name] = seconds
+            progress(name)
+        for name, seconds in pool.imap_unordered(run_task, [t for t in TASKS if t != "frame"]):
+            times[name] = seconds
+            progress(name)
+    return times
+
+
+def cache_location() -> str:
+    """Where Numba keeps the compiled kernels: ``$NUMBA_CACHE_DIR`` or ``__pycache__`` beside the sources."""
+    import numba
+    return numba.config.CACHE_DIR or f"__pycache__ folders under {os.path.dirname(os.path.abspath(__file__))}"
+
+
+def _kernel_frame(scene):
+    """The physical march's inputs for a 1×1 frame of ``scene`` built without any njit call: no objects
+    (empty geometry arrays), no shadow maps (empty tables), the sky at every pixel. Every array has the
+    dtype, rank and layout of the full frame's, so the march compiled for it serves the real frame."""
+    from .camera import camera_from_settings
+    from .geometry import build_geometry
+    from .lights import pack_lights
+    from .lights.shadowmaps import build_shadow_maps
+
+    bare = scene.replace(render=dataclasses.replace(scene.render, width=1, height=1), objects=(),
+                         lights=tuple(dataclasses.replace(light, shadows=None) for light in scene.lights))
+    camera = camera_from_settings(bare.camera, 1, 1)
+    geometry = build_geometry(bare)
+    lights = pack_lights(bare)
+    return bare, camera, lights, build_shadow_maps(bare, camera, geometry, lights), geometry.arrays
+
+
+def compile_march(scene) -> None:
+    """Compile (or load) the physical march for ``scene``'s types on its 1×1 kernel frame (module docstring)."""
+    from .render import resolved
+    from .techniques.physical import march_buffers
+
+    bare, camera, lights, maps, geo = _kernel_frame(scene)
+    march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geo, resolved(scene, "steps"),
+                  resolved(scene, "sampling"))
+
+
+def march_cached(scene) -> bool:
+    """Whether Numba's cache holds the physical march for ``scene``'s precision (its index, read without
+    compiling). False when the index cannot be read."""
+    import numba
+
+    from .march.physical import march_physical
+
+    dtype = np.float32 if scene.render.precision == "float32" else np.float64
+    try:
+        cache = march_physical._cache
+        codegen = march_physical.targetctx.codegen()
+        _, magic, code = cache._index_key((), codegen)
+        want = numba.typeof(np.zeros(3, dtype=dtype))
+        return any(key[1] == magic and key[2] == code and key[0] and key[0][0] == want
+                   for key in cache._cache_file._load_index())
+    except Exception:  # a Numba without these internals: assume cold
+        return False
+
+
+@contextlib.contextmanager
+def march_ahead(scene) -> Iterator[Callable[[], None]]:
+    """Compile the physical march of ``scene`` in a second process while the block runs; yields ``ready()``,
+    which waits for it (call it before the march). A no-op for other techniques, a cached kernel or one
+    core. The process is terminated when the block exits early (an error, an interrupt)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if scene.render.technique != "physical" or cores < 2 or march_cached(scene):
+        yield lambda: None
+        return
+    with _spawn_ignoring_sigint() as ctx:
+        proc = ctx.Process(target=compile_march, args=(scene,), daemon=True)
+        proc.start()
+    try:
+        yield proc.join
+    finally:
+        if proc.is_alive():
+            proc.terminate()
+        proc.join()
+
+
+def main_warmup(argv: list[str]) -> int:
+    """``vlref warmup [--jobs N]``: compile every kernel with a progress bar; prints the time taken."""
+    import argparse
+
+    from tqdm import tqdm
+
+    p = argparse.ArgumentParser(prog="vlref warmup", description="compile every kernel into Numba's cache "
+                                "once (a later first render then starts at once); a second run only loads")
+    p.add_argument("--jobs", type=int, help="worker processes (default: the available cores)")
+    try:
+        args = p.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    start = time.perf_counter()
+    with tqdm(total=len(TASKS), desc="vlref warmup", unit="group", file=sys.stderr, leave=False) as bar:
+        def done(name):
+            bar.set_postfix_str(name, refresh=False)
+            bar.update(1)
+        warmup(args.jobs, done)
+    print(f"vlref warmup: {len(TASKS)} kernel groups compiled or loaded in {time.perf_counter() - start:.1f} s "
+          f"(cache: {cache_location()})", file=sys.stderr)
+    return 0
