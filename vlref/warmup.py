@@ -4,7 +4,8 @@ Numba compiles a kernel on its first call and keeps the machine code in its cach
 ``__pycache__`` beside the sources, or ``$NUMBA_CACHE_DIR``); a process that finds it there loads it in
 milliseconds. The first render after an install therefore pays for compiling the kernels it uses.
 ``vlref warmup`` pays that once, for every kernel, by rendering a tiny frame of the default scene with
-each technique and precision and solving a tiny reference:
+each technique and precision (two frames of an animated scene for ``froxel``'s temporal pass) and
+solving a tiny reference:
 
 1. ``frame``: geometry, BVH build, G-buffer ray cast, surface shading and shadow maps (every later
    task needs a frame, so this one runs first, alone);
@@ -46,6 +47,10 @@ TASKS: dict[str, tuple[str, str | None, list[str]]] = {
     "slightlymad": ("render", None, ['render.technique="slightlymad"']),
     "urp": ("render", "urp_sun", ['render.technique="urp"']),  # URP needs a directional main light
     "radial": ("render", None, ['render.technique="radial"']),
+    # two frames of an animated scene, so the temporal reprojection compiles too (small grid: same types)
+    "froxel": ("sequence", "anim_spot", ['render.technique="froxel"', "techniques.froxel.temporal=true",
+                                         "techniques.froxel.grid_width=8", "techniques.froxel.grid_height=5",
+                                         "techniques.froxel.slices=4"]),
     "reference": ("reference", None, ["render.width=4", "render.height=3"]),
 }
 
@@ -62,6 +67,10 @@ def run_task(name: str) -> tuple[str, float]:
         if what == "frame":
             from .render import prepare_frame
             prepare_frame(scene).shadow_maps()
+        elif what == "sequence":
+            from .sequence import render_sequence
+            for _ in render_sequence(scene, range(2)):
+                pass
         elif what == "reference":
             from .reference import render_reference
             render_reference(scene, rel_tol=1e-2, shadow_samples=8)
