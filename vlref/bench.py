@@ -218,20 +218,25 @@ def plain_march(origin, dirs, seg, steps, sigma_t, lf, data, base, res, out):
         out[i, j] = acc
 
 
-def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict:
-    """Samples/s of :func:`plain_march` on (a) at ``width x height`` with ``threads`` Numba threads."""
-    from .bench_baseline import light_segments
-    from .lights.shadowmaps import S_OFFSET, S_RES
+def _one_spot_frame(cfg: BenchConfig, width: int, height: int):
+    """Scene (a) at ``width x height`` and what the hand-written marches take: ``(scene, frame, shadow maps,
+    ray directions, segment ends, light floats (float64), camera origin)``."""
     from .render import prepare_frame
 
     scene = bench_scene(width, height, cfg.steps, "one", cfg.shadow_resolution)
     frame = prepare_frame(scene)
-    sm = frame.shadow_maps()
-    cam = frame.camera
-    dirs = cam.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
-    lf = frame.lights.floats.astype(np.float64)
-    origin = np.asarray(cam.position, dtype=np.float64)
+    origin = np.asarray(frame.camera.position, dtype=np.float64)
+    return (scene, frame, frame.shadow_maps(), frame.camera.ray_directions(), t_end,
+            frame.lights.floats.astype(np.float64), origin)
+
+
+def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict:
+    """Samples/s of :func:`plain_march` on (a) at ``width x height`` with ``threads`` Numba threads."""
+    from .bench_baseline import light_segments
+    from .lights.shadowmaps import S_OFFSET, S_RES
+
+    scene, frame, sm, dirs, t_end, lf, origin = _one_spot_frame(cfg, width, height)
     seg = np.empty((1, height, width, 2))
     light_segments(frame.lights.ints, lf, origin, dirs, t_end, seg)
     out = np.empty((height, width))
@@ -252,20 +257,13 @@ def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
     from .bench_baseline import light_segments, march_spot_numpy
     from .march.patterns import offsets
     from .medium import pack_medium
-    from .render import prepare_frame, resolved
+    from .render import resolved
     from .techniques import physical
 
     w, h = cfg.baseline
-    scene = bench_scene(w, h, cfg.steps, "one", cfg.shadow_resolution)
-    frame = prepare_frame(scene)
-    sm = frame.shadow_maps()
-    cam = frame.camera
-    dirs = cam.ray_directions()
-    t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
+    scene, frame, sm, dirs, t_end, lf, origin = _one_spot_frame(cfg, w, h)
     beta = offsets(resolved(scene, "sampling"), w, h, scene.render.seed)
-    lf = frame.lights.floats.astype(np.float64)
     mp = pack_medium(scene).params
-    origin = np.asarray(cam.position, dtype=np.float64)
 
     def run():
         seg = np.empty((1, h, w, 2))
