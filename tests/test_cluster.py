@@ -22,11 +22,12 @@ import pytest
 
 from vlref.cli import main
 from vlref.cluster import local_cluster
-from vlref.oracle.golden import GOLDEN_DIR, SUITE_FILE, main_golden, verify
+from vlref.oracle.golden import SUITE_FILE, main_golden, verify
 from vlref.reference import render_reference
 from vlref.reference.tiles import render_reference_tiled
 from vlref.scene import load_scene
 
+GOLDEN_DIR = Path(__file__).resolve().parents[1] / "data" / "golden"  # the checkout's goldens, installed or not
 SMALL_REF = ["pillars", "--set", "render.width=32", "--set", "render.height=18", "--rel-tol", "1e-3"]
 GOLDEN_SUBSET = ["--only", "pillars/physical", "--only", "pillars/killzone", "--only", "pillars/radial"]
 

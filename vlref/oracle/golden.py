@@ -49,7 +49,7 @@ from ..cluster import ItemsFailed, add_scheduler_argument
 from ..errors import InputError
 
 __all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
-           "main_golden", "GOLDEN_DIR", "SUITE_FILE", "MANIFEST", "find_golden_dir", "golden_dir_candidates",
+           "main_golden", "SUITE_FILE", "MANIFEST", "find_golden_dir", "golden_dir_candidates",
            "golden_parser"]
 
 SUITE_FILE = Path(__file__).resolve().parents[1] / "data" / "golden_suite.toml"
@@ -87,8 +87,6 @@ def build_dir() -> Path:
         return CHECKOUT_GOLDEN
     raise InputError("<command line>", "--dir", "not running from a source checkout: name the folder to build in")
 
-
-GOLDEN_DIR = CHECKOUT_GOLDEN
 
 
 @dataclass(frozen=True)
@@ -266,9 +264,10 @@ def read_manifest(golden_dir) -> dict:
     return data
 
 
-def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
+def build(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
           log=print, scheduler: str | None = None, quiet: bool = False) -> dict:
-    """Render the suite (or the ``only`` glob patterns of entry names) into ``golden_dir``; returns the manifest.
+    """Render the suite (or the ``only`` glob patterns of entry names) into ``golden_dir`` (default
+    :func:`build_dir`); returns the manifest.
 
     With ``only``, the other entries of an existing manifest are kept. Files of entries no longer in the
     suite are removed. All files are written atomically (:func:`vlref.io.output_dir`). Entries are
@@ -282,7 +281,7 @@ def build(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | No
     from ..render import scene_hash, scene_settings_json
 
     suite = load_suite(suite_path)
-    golden_dir = Path(golden_dir)
+    golden_dir = Path(golden_dir) if golden_dir is not None else build_dir()
     entries = suite_entries(suite)
     selected = _select(entries, only)
     old = {}
@@ -361,10 +360,11 @@ def _check_files(golden_dir: Path, record: dict) -> list[str]:
     return problems
 
 
-def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
+def verify(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = None,
            preset: str | None = None, log=print, scheduler: str | None = None,
            quiet: bool = False) -> list[Outcome]:
-    """Check checksums, staleness and re-renders of the goldens (module docstring); one outcome per entry.
+    """Check checksums, staleness and re-renders of the goldens in ``golden_dir`` (default
+    :func:`find_golden_dir`; module docstring); one outcome per entry.
 
     The re-renders are independent items run on ``scheduler`` (:func:`vlref.cluster.run_items`) and
     compared here as they arrive; the outcomes are in entry-name order whatever the scheduler.
@@ -374,7 +374,7 @@ def verify(golden_dir=GOLDEN_DIR, suite_path=SUITE_FILE, only: Sequence[str] | N
     from ..render import scene_hash, scene_settings_json
     from .compare import compare_arrays
 
-    golden_dir = Path(golden_dir)
+    golden_dir = Path(golden_dir) if golden_dir is not None else find_golden_dir()
     manifest = read_manifest(golden_dir)
     suite = load_suite(suite_path)
     outcomes = []
