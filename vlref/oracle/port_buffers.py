@@ -233,7 +233,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
     Returns ``{filter: ShadowMaps}`` for ``None`` (the scene's filter), ``"hard"`` and ``"pcf"``, ready
     for :attr:`vlref.render.Frame.shadow_cache`.
     """
-    from ..lights.pack import F_DX, F_PX, F_RX, F_TAN_HALF, F_UX, I_KIND
+    from ..lights.pack import F_DX, F_PX, F_RX, F_TAN_HALF, F_UX, I_KIND, KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT
     from ..lights.shadowmaps import (CUBE_FACES, MAX_CASCADES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET,
                                      S_RES, S_STRENGTH, SHADOW_HARD, SHADOW_PCF, ShadowMaps, cascade_sphere)
 
@@ -257,26 +257,27 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
         right, up = lf[F_RX:F_RX + 3], lf[F_UX:F_UX + 3]
         res = m.tiles[0].texels.shape[0]
         kind = int(packed.ints[m.light, I_KIND])
-        expected = {1: 1, 0: 6}.get(kind, len(m.splits) - 1)
-        if len(m.tiles) != expected or (kind == 2 and not 1 <= expected <= MAX_CASCADES):
-            raise InputError(file, key, f"a {light.type} light needs {expected if kind != 2 else '1..8'} tile(s) "
-                                        f"({'len(splits) - 1' if kind == 2 else 'one per face' if kind == 0 else 'one'}),"
+        expected = {KIND_SPOT: 1, KIND_POINT: 6}.get(kind, len(m.splits) - 1)
+        directional = kind == KIND_DIRECTIONAL
+        if len(m.tiles) != expected or (directional and not 1 <= expected <= MAX_CASCADES):
+            raise InputError(file, key, f"a {light.type} light needs {expected if not directional else '1..8'} tile(s) "
+                                        f"({'len(splits) - 1' if directional else 'one per face' if expected == 6 else 'one'}),"
                                         f" got {len(m.tiles)}")
         x, y = texel_grid(res)
         ordered = m.tiles
-        if kind == 0:
+        if kind == KIND_POINT:
             faces = [t.face for t in m.tiles]
             if sorted(faces) != sorted(CUBE_ORDER):
                 raise InputError(file, key + ".tiles", f"cube faces must be {', '.join(CUBE_ORDER)} once each, got {faces}")
             ordered = tuple(m.tiles[faces.index(f)] for f in CUBE_ORDER)
         for k, tile in enumerate(ordered):
             world = _tile_points(tile, m.encoding, m.convention)
-            if kind == 1:
+            if kind == KIND_SPOT:
                 t = lf[F_TAN_HALF]
                 probe = pos + fwd + (x * t)[:, None] * right + (y * t)[:, None] * up
                 value = np.linalg.norm(world - pos, axis=1)
                 name = f"shadow_spot_{m.light}"
-            elif kind == 0:
+            elif kind == KIND_POINT:
                 r_f, u_f, f_f = (np.asarray(a, dtype=np.float64) for a in CUBE_FACES[k][1:])
                 probe = pos + f_f + x[:, None] * r_f + y[:, None] * u_f
                 value = np.linalg.norm(world - pos, axis=1)
@@ -295,7 +296,7 @@ def shadow_maps_from_port(scene, camera: Camera, packed, maps: Sequence[PortShad
             if k == 0:
                 ints[m.light, S_RES], ints[m.light, S_OFFSET] = res, offset
             offset += res * res
-        if kind == 2:
+        if kind == KIND_DIRECTIONAL:
             ints[m.light, S_CASCADES] = len(m.tiles)
     data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
     out = {}
@@ -473,7 +474,7 @@ def _encode(stored: np.ndarray, z: np.ndarray, encoding: str, convention: str, n
 def _light_tiles(scene, camera: Camera, maps, light: int, packed, encoding: str, convention: str):
     """vlref's maps of ``light`` as a port would export them: ``(tiles [(texels, view, projection, face)],
     splits)``, texels row 0 = top."""
-    from ..lights.pack import F_DX, F_PX, F_RX, F_UX, I_KIND
+    from ..lights.pack import F_DX, F_PX, F_RX, F_UX, I_KIND, KIND_DIRECTIONAL, KIND_SPOT
     from ..lights.shadowmaps import CUBE_FACES, S_CASC, cascade_splits
 
     sh = scene.lights[light].shadows
@@ -486,7 +487,7 @@ def _light_tiles(scene, camera: Camera, maps, light: int, packed, encoding: str,
     tiles, splits = [], ()
     for k, (name, stored) in enumerate(bufs):
         stored = stored.astype(np.float64)
-        if kind == 2:
+        if kind == KIND_DIRECTIONAL:
             c = maps.floats[light, S_CASC + 5 * k:S_CASC + 5 * k + 5]
             centre, radius, back = c[:3], c[3], c[4]
             rot = np.stack([right, up, fwd], axis=1)
@@ -495,7 +496,7 @@ def _light_tiles(scene, camera: Camera, maps, light: int, packed, encoding: str,
             proj = orthographic(radius, radius, near, far, "d3d" if convention == "linear" else convention)
             z, face, ortho = stored, "", True
         else:
-            if kind == 1:
+            if kind == KIND_SPOT:
                 rot, fov, face = np.stack([right, up, fwd], axis=1), scene.lights[light].spot_angle, ""
                 scale = math.tan(math.radians(fov) / 2.0)
             else:
@@ -508,7 +509,7 @@ def _light_tiles(scene, camera: Camera, maps, light: int, packed, encoding: str,
             ortho = False
         texels = _encode(stored, z, encoding, convention, near, far, ortho).reshape(res, res)
         tiles.append((texels, view, proj, face))
-    if kind == 2:
+    if kind == KIND_DIRECTIONAL:
         far = min(sh.distance, camera.far)
         splits = tuple(cascade_splits(camera.near, max(far, camera.near * (1 + 1e-6)), len(bufs), sh.split_lambda))
     return tiles, splits
