@@ -97,8 +97,10 @@ def kz_segments(cam, dirs, t_end, lights, light):
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def view_transmittance(cam, dirs, t_end, mp, lattice):
-    """``exp(-τ(0, t_end))`` per pixel (:func:`vlref.medium.optical_depth`), prange over pixels."""
+def view_transmittance(cam, dirs, t_end, medium):
+    """``exp(-τ(0, t_end))`` per pixel (:func:`vlref.medium.optical_depth` of the :class:`~vlref.medium.PackedMedium`
+    ``medium``), prange over pixels."""
+    mp, lattice = medium.params, medium.noise
     h, w = t_end.shape
     out = np.ones((h, w))
     for p in prange(h * w):

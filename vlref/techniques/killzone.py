@@ -102,7 +102,7 @@ def render(scene, frame) -> dict:
         out["blur_h"], out["blur_v"] = blur_h, light
     dirs = cam.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
-    trans = (view_transmittance(camp, dirs, t_end, med.params, med.noise) if p.transmittance
+    trans = (view_transmittance(camp, dirs, t_end, med) if p.transmittance
              else np.ones((H, W)))
     out["inscatter"] = light
     out["transmittance"] = trans
