@@ -128,7 +128,7 @@ def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
 
 
 def test_warmup_covers_every_technique_and_precision():
-    from vlref.scene.model import TECHNIQUES
+    from vlref.techniques import TECHNIQUES
     from vlref.warmup import TASKS
 
     rendered = {tuple(overrides) for what, _, overrides in TASKS.values() if what in ("render", "sequence")}

@@ -257,7 +257,7 @@ def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
     from .bench_baseline import light_segments, march_spot_numpy
     from .march.patterns import offsets
     from .medium import pack_medium
-    from .render import resolved
+    from .techniques import resolved
     from .techniques import physical
 
     w, h = cfg.baseline

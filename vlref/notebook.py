@@ -54,6 +54,7 @@ import numpy as np
 from .errors import InputError
 from .io import srgb8, write_exr
 from .render import Frame, prepare_frame
+from .techniques import TECHNIQUES
 
 __all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice",
            "Toggle", "live_widgets", "interact_or_static", "Timing", "time_call", "PreviewRenderer", "examples_dir",
@@ -323,8 +324,7 @@ class PreviewRenderer:
         and ``scene_colour`` of ``scene``, as :func:`vlref.render.render` with ``stages=True`` gives them
         (shadow maps excepted)."""
         frame = self.frame(scene)
-        technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
-        out = dict(technique.render(scene, frame))
+        out = dict(TECHNIQUES[scene.render.technique].render(scene, frame))
         out.setdefault("depth", frame.gbuffer.depth)
         out.setdefault("scene_colour", frame.scene_colour)
         return out

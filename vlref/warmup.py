@@ -143,7 +143,7 @@ def _kernel_frame(scene):
 
 def compile_march(scene) -> None:
     """Compile (or load) the physical march for ``scene``'s types on its 1×1 kernel frame (module docstring)."""
-    from .render import resolved
+    from .techniques import resolved
     from .techniques.physical import march_buffers
 
     bare, camera, lights, maps, geo = _kernel_frame(scene)

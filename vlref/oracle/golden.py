@@ -15,13 +15,11 @@ build (stale goldens: rebuild deliberately), or a re-render differs from a golde
 tolerance preset (``float32``: last-ulp differences of exp/pow between machines pass, code changes
 fail). Exit 2: bad input (unreadable manifest, unknown option).
 
-Applicability (which techniques render which scene):
-
-* ``physical``, ``killzone``, ``slightlymad``, ``froxel``: every scene (they light any light type);
-* ``urp``: scenes with a directional light (the URP tutorial marches the main light only);
-* ``radial``: scenes whose radial light (:func:`vlref.techniques.radial.radial_light`) projects inside
-  the frame, in front of the camera: a screen-space radial blur centred off screen (or behind the
-  camera, where the technique fades to nothing) tests only its edge clamping.
+Applicability (which techniques render which scene) is each technique's ``applies`` rule in the
+registry (:data:`vlref.techniques.TECHNIQUES`): ``physical``, ``killzone``, ``slightlymad``, ``froxel``
+every scene; ``urp`` scenes with a directional light (:func:`vlref.techniques.urp.has_main_light`);
+``radial`` scenes whose radial light projects inside the frame (:func:`vlref.techniques.radial.light_in_frame`).
+The suite's ``techniques`` default to every registered technique.
 
 Animated scenes (an ``[animation]`` table) are rendered only by the suite's ``animation_techniques``,
 one entry per frame of ``animation_frames``, named ``scene@F/technique`` and stored under
@@ -48,7 +46,7 @@ from .. import __version__
 from ..cluster import ItemsFailed, add_scheduler_argument
 from ..errors import InputError
 
-__all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
+__all__ = ["Entry", "GoldenSuite", "load_suite", "suite_entries", "render_entry", "build", "verify",
            "main_golden", "SUITE_FILE", "MANIFEST", "find_golden_dir", "golden_dir_candidates",
            "golden_parser"]
 
@@ -131,7 +129,7 @@ class Entry:
 
 def load_suite(path=SUITE_FILE) -> GoldenSuite:
     """Read and check a suite file; :class:`InputError` names the bad key."""
-    from ..scene.model import TECHNIQUES
+    from ..techniques import TECHNIQUES
     from ..tomlfile import read_toml
 
     path = Path(path)
@@ -171,24 +169,6 @@ def load_suite(path=SUITE_FILE) -> GoldenSuite:
                        animation_frames=tuple(frames), animation_techniques=tuple(anim_techniques), **ints)
 
 
-def applies(scene, technique: str) -> bool:
-    """Whether ``technique`` belongs in the suite for ``scene`` (module docstring)."""
-    if technique == "urp":
-        return any(light.type == "directional" for light in scene.lights)
-    if technique == "radial":
-        from ..camera import camera_from_settings
-        from ..post.radial import light_screen_uv
-        from ..techniques.radial import radial_light
-
-        light = scene.lights[radial_light(scene)]
-        cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
-        target = (np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0]) if light.type == "directional"
-                  else np.array([*light.position, 1.0]))
-        (u, v), visible = light_screen_uv(cam.view_projection() @ target)
-        return visible > 0.0 and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
-    return True
-
-
 def _overrides(suite: GoldenSuite, scene, technique: str) -> tuple[str, ...]:
     out = [f"render.width={suite.width}", f"render.height={suite.height}", f"render.steps={suite.steps}",
            f'render.technique="{technique}"']
@@ -203,6 +183,7 @@ def suite_entries(suite: GoldenSuite) -> list[Entry]:
     """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order; an
     animated scene gets one entry per frame of ``animation_frames`` (``render.frame=F`` appended)."""
     from ..scene import bundled_scenes, load_scene
+    from ..techniques import TECHNIQUES
 
     entries = []
     for name, path in bundled_scenes().items():
@@ -210,7 +191,7 @@ def suite_entries(suite: GoldenSuite) -> list[Entry]:
         animated = base.animation is not None
         frames = suite.animation_frames if animated else (None,)
         for technique in suite.techniques:
-            if applies(base, technique) and (not animated or technique in suite.animation_techniques):
+            if TECHNIQUES[technique].applies(base) and (not animated or technique in suite.animation_techniques):
                 over = _overrides(suite, base, technique)
                 entries += [Entry(name, technique, over) if f is None else
                             Entry(name, technique, over + (f"render.frame={f}",), f) for f in frames]

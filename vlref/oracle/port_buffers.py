@@ -60,7 +60,6 @@ Decoding (float64):
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import sys
 import time
@@ -73,6 +72,7 @@ import numpy as np
 from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings, raw_to_linear
 from ..errors import InputError
 from ..lights.shadowmaps import texel_grid
+from ..techniques import FRAME_BUFFERS, TECHNIQUES
 
 __all__ = ["PortTile", "PortShadowMap", "PortBuffers", "load_port", "decode_depth", "camera_from_matrices",
            "shadow_maps_from_port", "port_frame", "march_port", "main_march", "export_port", "orthographic",
@@ -614,7 +614,7 @@ def march_port(path, overrides: Sequence[str] = ()) -> dict[str, np.ndarray]:
     """Load a port manifest and run its scene's technique on the port's buffers: the technique's buffers."""
     port = load_port(path, overrides)
     frame = port_frame(port, str(path))
-    technique = importlib.import_module(f"vlref.techniques.{port.scene.render.technique}")
+    technique = TECHNIQUES[port.scene.render.technique]
     out = technique.render(port.scene, frame)
     out["depth"] = port.depth
     return out
@@ -695,9 +695,9 @@ def main_march(argv: Sequence[str]) -> int:
         check_output_dir(args.output)
         port = load_port(args.manifest, args.set or ())
         frame = port_frame(port, args.manifest)
-        technique = importlib.import_module(f"vlref.techniques.{port.scene.render.technique}")
+        technique = TECHNIQUES[port.scene.render.technique]
         out = technique.render(port.scene, frame)
-        names = [k for k in out if args.stages or k in ("final", "inscatter", "transmittance")]
+        names = [k for k in out if args.stages or k in FRAME_BUFFERS]
         meta = {"scene_hash": scene_hash(port.scene), "technique": port.scene.render.technique,
                 "port_manifest": str(Path(args.manifest).resolve())}
         with output_dir(args.output) as tmp:

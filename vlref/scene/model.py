@@ -20,7 +20,8 @@ from .technique_params import TechniqueParams
 
 Vec3 = tuple[float, float, float]
 
-TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial", "froxel")
+TECHNIQUES = tuple(f.name for f in dataclasses.fields(TechniqueParams))
+"""The accepted ``render.technique`` names, one per parameter table (the same as ``vlref.techniques``)."""
 SAMPLINGS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 RESOLUTIONS = ("full", "half", "third", "quarter")
 RESOLUTION_DIVISORS = {"full": 1, "half": 2, "third": 3, "quarter": 4}

@@ -30,7 +30,7 @@ from ..post.composite import composite_physical
 from ..post.downsample import downsample_min
 from ..post.resolution import low_res_size
 from ..post.upsample import thesis_upsample
-from ..render import resolved
+from . import resolved
 
 __all__ = ["render", "light_resolutions"]
 
@@ -111,5 +111,4 @@ def render(scene, frame) -> dict:
     out["inscatter"] = light
     out["transmittance"] = trans
     out["final"] = composite_physical(frame.scene_colour, trans, light)
-    out["composite"] = out["final"]
     return out
