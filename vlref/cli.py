@@ -105,16 +105,17 @@ def cmd_render(args) -> int:
     from .io import output_dir, save_render
     from .render import render
 
-    from .warmup import march_ahead
+    from .warmup import compile_ahead_in_background
 
     scene = _load(args)
     if args.frames is not None:
         return _render_frames(args, scene)
-    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
-    with _Bar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+    # 4 render stages, then the files; cold shadow-map and march kernels compile in a second process meanwhile
+    with _Bar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, \
+            compile_ahead_in_background(scene) as ahead_ready:
         def stage(name: str) -> None:
-            if name == "shading":  # the frame is done: the march comes next
-                march_ready()
+            if name == "shading":  # the frame is done: the shadow maps and the march come next
+                ahead_ready()
             bar.stage(name)
 
         result = render(scene, stages=args.stages, progress=stage)

@@ -39,7 +39,7 @@ __all__ = ["light_incidence", "scene_colour", "SURFACE_OFFSET"]
 SURFACE_OFFSET = 1e-4
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def light_incidence(li, lf, cookies, lut, k, x, y, z):
     """``(lx, ly, lz, dist, er, eg, eb)`` of light ``k`` at ``(x, y, z)`` (module docstring).
 

@@ -239,7 +239,7 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     return ShadowMaps(ints, floats, data, tint, names)
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _tap(data, tint, base, tbase, res, col, row, d_ref):
     k = row * res + col
     lit = 1.0 if d_ref <= data[base + k] else 0.0
@@ -248,7 +248,7 @@ def _tap(data, tint, base, tbase, res, col, row, d_ref):
     return lit, lit, lit
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
     """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top). Without a transparent layer
     (``tbase < 0``) r = g = b and the PCF blend is evaluated once."""
@@ -277,7 +277,7 @@ def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
             w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _cube_face(wx, wy, wz):
     ax, ay, az = abs(wx), abs(wy), abs(wz)
     if ax >= ay and ax >= az:
@@ -287,7 +287,7 @@ def _cube_face(wx, wy, wz):
     return 4 if wz >= 0 else 5
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
     """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64)."""
     res = sm_i[light, S_RES]
