@@ -1,4 +1,4 @@
-"""The `vlref` command as a new user meets it (issue 17, items 2-7), run as subprocesses: memory refusal,
+"""The `vlref` command as a new user meets it, run as subprocesses: memory refusal,
 early output checks, --set errors, the installed golden suite, HDR-FLIP's absence, and help texts."""
 
 import argparse

@@ -35,7 +35,7 @@ def test_nearest_index_is_floor_of_uv(n_src, n_dst):
 
 
 def test_nearest_index_source_texels():
-    # research §2.3: half -> 2j+1, third -> 3j+1, quarter -> 4j+2; full-res i reads low-res floor(i/f)
+    # SOURCES §2.3: half -> 2j+1, third -> 3j+1, quarter -> 4j+2; full-res i reads low-res floor(i/f)
     assert nearest_index(16, 8).tolist() == [2 * j + 1 for j in range(8)]
     assert nearest_index(24, 8).tolist() == [3 * j + 1 for j in range(8)]
     assert nearest_index(32, 8).tolist() == [4 * j + 2 for j in range(8)]

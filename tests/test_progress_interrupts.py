@@ -1,4 +1,4 @@
-"""Progress band by band and clean interrupts (issue 15).
+"""Progress band by band and clean interrupts.
 
 * The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
   bands change no bit of a result.

@@ -1,4 +1,4 @@
-"""Techniques side by side (issue 17, item 1): every technique's default render of every bundled scene it
+"""Techniques side by side: every technique's default render of every bundled scene it
 applies to has a usable PNG preview (automatic exposure), and its HDR level lies within 10x of
 ``physical`` on the same scene unless docs/TECHNIQUES.md states the ratio and the reason."""
 

@@ -9,7 +9,7 @@ from vlref.render import prepare_frame
 from vlref.scene.load import load_scene
 from vlref.techniques import slightlymad
 
-# research §1.5, rows y = 0..7 from the texture's bottom (v = 0)
+# SOURCES §1.5, rows y = 0..7 from the texture's bottom (v = 0)
 VL_DITHER_8 = """
   3 192  51 239  15 204  62 251
 129  66 176 113 141  78 188 125

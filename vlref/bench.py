@@ -29,7 +29,7 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
                   ``tracemalloc`` peak of the NumPy allocations in this process, and the peak resident
                   set of a subprocess that renders the same frame (``VmHWM``; ``ru_maxrss`` where there
                   is no ``/proc``: on Linux ``ru_maxrss`` carries the parent's peak across ``exec``).
-``targets``       each target of issue 8, the measured figure, and whether it is met.
+``targets``       each target of BENCHMARKS.md "Targets", the measured figure, and whether it is met.
 
 Timings are medians of ``repeats`` runs after one warm-up run (JIT compile excluded except in
 ``first_render``). Benchmarks report; they never fail on a timing. The core stack (NumPy, Numba,
@@ -72,7 +72,7 @@ THREADS = (1, 2, 4, 8, 16)
 
 @dataclass(frozen=True)
 class BenchConfig:
-    """Sizes of one benchmark run (``FULL`` is issue 8's; ``QUICK`` a smoke run for CI)."""
+    """Sizes of one benchmark run (``FULL`` the targets' sizes; ``QUICK`` a smoke run for CI)."""
 
     width: int = 1920
     height: int = 1080
@@ -185,7 +185,7 @@ def bench_march(cfg: BenchConfig) -> dict:
 
 @njit(cache=True, fastmath=False, parallel=True)
 def plain_march(origin, dirs, seg, steps, sigma_t, lf, data, base, res, out):
-    """The plain comparison kernel of issue 12 on (a)'s rays and spot light: per sample one ``exp`` (view
+    """The plain kernel of BENCHMARKS.md "Device run", on (a)'s rays and spot light: per sample one ``exp`` (view
     transmittance ``e^{-σt t}``), one ``pow`` (``d^{-3}``, the shape of HG's denominator) and a hard
     (nearest-texel) shadow-map lookup; no fog, cone, light leg or phase. ``seg`` (1, H, W, 2) from
     :func:`vlref.bench_baseline.light_segments`; ``out`` (H, W)."""
@@ -473,7 +473,7 @@ def _target(name, value, limit, unit, better="lower", note=""):
 
 
 def targets(cfg: BenchConfig, r: dict) -> list[dict]:
-    """Issue 8's targets against this run (meaningful only for the FULL sizes)."""
+    """BENCHMARKS.md "Targets" against this run (meaningful only for the FULL sizes)."""
     one = r["march"]["one_spot"]
     cores = r["machine"]["numba_threads"]
     scaling = r["scaling"]["threads"]

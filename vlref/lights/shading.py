@@ -1,6 +1,6 @@
 """What a light delivers at a point (unshadowed), and the scene colour of the G-buffer.
 
-:func:`light_incidence` evaluates ``E_l(x)`` of DESIGN.md without visibility or medium:
+:func:`light_incidence` evaluates ``E_l(x)`` of docs/PHYSICS.md "The integral" without visibility or medium:
 
 * point: ``colour·intensity · A(d)`` with ``A`` the light's distance law
   (:mod:`vlref.lights.attenuation`), 0 beyond ``range``;

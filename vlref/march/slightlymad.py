@@ -1,6 +1,6 @@
 """SlightlyMad/VolumetricLights: dither texture, density, light term and the ``RayMarch`` loop.
 
-Everything here follows ``research/seed-algorithms.md`` §1 (VL = ``VolumetricLight.shader``,
+Everything here follows ``docs/SOURCES.md`` §1 (VL = ``VolumetricLight.shader``,
 ``VolumetricLight.cs``, ``VolumetricLightRenderer.cs`` at HEAD ``d20b6f9``).
 
 Dither (§1.5): the 8x8 texture holds byte ``floor(255 k / 65)`` with ``k`` the **transposed**
@@ -43,7 +43,7 @@ __all__ = ["dither_k", "dither_table", "dither_offsets", "spot_profile_cookie", 
 
 SPOT_PROFILE = ((0.0, 1.0), (0.5, 1.0), (0.6, 0.977), (0.7, 0.803), (0.8, 0.448), (0.85, 0.273), (0.9, 0.140),
                 (0.95, 0.057), (1.0, 0.013), (1.1, 0.0))
-"""(r, alpha) of VL's ``spot.png``, r in half-widths from the centre (research Appendix A, measured)."""
+"""(r, alpha) of VL's ``spot.png``, r in half-widths from the centre (SOURCES Appendix A, measured)."""
 
 CONE_COOKIE_ONLY = -1
 """``cone_law`` value selecting VL's spot falloff: the cookie alone (§1.6)."""

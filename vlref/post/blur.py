@@ -7,7 +7,7 @@ result (:func:`blur_hv`). ``values`` is ``(H, W)`` or ``(H, W, C)``; every pass 
     out = sum_k G_k W_k v_k / sum_k G_k W_k,
 
 accumulated in the source's tap order (listed per pass) in float64. Taps beyond the image use
-clamp addressing (the sources' RT wrap modes are [U], research §1.9/§7).
+clamp addressing (the sources' RT wrap modes are [U], SOURCES §1.9/§7).
 
 Depth weight ``W_k`` of a tap with depth difference ``dz = |z_k - z_0|`` (:func:`depth_delta`, with
 ``inf - inf = 0`` so sky matches sky): ``"gaussian"`` ``exp(-(dz * c) * (dz * c))`` (VL, URP) or
@@ -33,7 +33,7 @@ VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
 
 URP_GAUSS_WEIGHTS = (0.14446445, 0.13543542, 0.11153505, 0.08055309, 0.05087564, 0.02798160, 0.01332457,
                      0.00545096)
-"""``gauss_filter_weights[0..7]`` of the URP tutorial (research §2.5)."""
+"""``gauss_filter_weights[0..7]`` of the URP tutorial (SOURCES §2.5)."""
 
 DEPTH_WEIGHTS = ("gaussian", "inverse")
 
@@ -149,7 +149,7 @@ def _values(values) -> np.ndarray:
 def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, depth_weight_kind: str = "gaussian",
                    epsilon: float = 1e-3, keep_alpha: bool = False) -> np.ndarray:
     """One pass with taps at integer texel offsets ``k = -K..K`` (``K = len(gauss) - 1``), value and
-    depth read at the same texel of the same resolution (thesis §4.2.6; VL §1.9).
+    depth read at the same texel of the same resolution (thesis §4.2.6; SOURCES §1.9).
 
     Tap order (VL ``BilateralBlur``): the centre, then ``k = -K..-1``, then ``k = 1..K``; tap ``k``
     weighs ``gauss[|k|] * W(dz_k)``, the centre ``gauss[0] * W(0)`` (1 for ``"gaussian"``). ``keep_alpha``: the last
@@ -190,7 +190,7 @@ def thesis_blur_pass(values, depth, axis: int, radius: int = 3, sigma: float = 1
 
 def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: float = 1.5,
                  depth_factor: float = 0.5, kernel_radius: int | None = None) -> np.ndarray:
-    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (research §1.9).
+    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (SOURCES §1.9).
 
     Radius ``K`` = 7 / 5 / 6 for full / half / quarter (``kernel_radius`` overrides it), Gaussian
     ``sigma = K / deviation`` (``GAUSS_BLUR_DEVIATION 1.5``), depth weight
@@ -242,7 +242,7 @@ def _urp_pass(f, z, axis, taps_lo, taps_hi, centre_hi, g, falloff, uv_origin):
 
 def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: float, falloff: float = 100.0,
                           weights=URP_GAUSS_WEIGHTS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP article's pass (P1, research §2.5) on the low-res fog ``(h, w)``.
+    """The URP article's pass (P1, SOURCES §2.5) on the low-res fog ``(h, w)``.
 
     Tap ``k = -samples..samples`` sits at uv ``u_k = u + (k * amount) / 1000`` along the axis --
     **uv units**, so the blur width depends on resolution and aspect. The fog is point-sampled at
@@ -265,7 +265,7 @@ def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: floa
 
 def urp_repo_blur_pass(fog, depth_full, axis: int, taps: int = 5, falloff: float = 100.0,
                        weights=URP_GAUSS_WEIGHTS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP repository's pass (R, research §2.5): fixed ``n = 5``, integer texel offsets.
+    """The URP repository's pass (R, SOURCES §2.5): fixed ``n = 5``, integer texel offsets.
 
     The fog tap ``k`` is low-res texel ``j + k``; its depth is the raw full-res depth at the
     *full-res* texel ``c(j) + k``, ``c(j)`` the texel under the low-res centre -- the source's offset

@@ -2,7 +2,7 @@
 
 Colours are linear HDR, ``(H, W, 3)`` (or ``(H, W, 4)`` where stated); per-pixel scalars ``(H, W)``.
 
-Storage rounding (research §6.9) -- apply after the pass that writes the buffer:
+Storage rounding (SOURCES §6.9) -- apply after the pass that writes the buffer:
 
 * :func:`fp16` -- an ARGBHalf target (VL's light buffers): each value is first rounded to fp32 (the
   shader's ALU result), then to IEEE half with round-to-nearest-even. Values beyond the half range
@@ -42,7 +42,7 @@ def composite_physical(scene, transmittance, inscatter) -> np.ndarray:
 
 
 def composite_vl(scene, volume) -> np.ndarray:
-    """VolumetricLights' ``BlitAdd`` (research §1.11): ``rgb = scene_rgb * V_a + V_rgb``, ``a = scene_a * V_a``.
+    """VolumetricLights' ``BlitAdd`` (SOURCES §1.11): ``rgb = scene_rgb * V_a + V_rgb``, ``a = scene_a * V_a``.
 
     ``volume`` is the full-res RGBA light buffer ``(H, W, 4)``; its alpha is the transmittance of
     the last directional light drawn (1 without one). ``scene`` is ``(H, W, 3)`` or ``(H, W, 4)``;
@@ -62,7 +62,7 @@ def composite_vl(scene, volume) -> np.ndarray:
 
 
 def composite_urp(scene, fog, intensity: float = 1.0, colour=(1.0, 1.0, 1.0)) -> np.ndarray:
-    """The URP tutorial's composite (research §2.7): ``scene + (F * intensity) * colour``.
+    """The URP tutorial's composite (SOURCES §2.7): ``scene + (F * intensity) * colour``.
 
     ``fog`` is the upsampled scalar fog ``F`` (H, W); ``colour`` is ``_SunMoonColor`` = the light's
     colour *without* its intensity; no extinction is applied to the scene.

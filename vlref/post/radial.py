@@ -5,7 +5,7 @@ Coordinates: the image's own uv, ``u = (x + 0.5) / W`` right and ``v = (y + 0.5)
 not depend on the uv orientation as long as the light's uv is given in the same convention
 (:func:`light_screen_uv` does this from clip space).
 
-Listing 13-1 (research §3.2), per pixel ``u`` with light ``l``:
+Listing 13-1 (SOURCES §3.2), per pixel ``u`` with light ``l``:
 
     delta = (u - l) * (1/n * Density);  C = tex(u);  dec = 1
     repeat n times:  u -= delta;  C += tex(u) * (dec * Weight);  dec *= Decay
@@ -147,7 +147,7 @@ def radial_blur(image, light_uv, num_samples: int, density: float, weight: float
 def disenone_scatter(radiated, light_uv, density: float = 1.0, weight: float = 1.0 / 32.0, decay: float = 1.0,
                      num_samples: int = 32, iterations: int = 31, tap_scale: float = 0.03125,
                      address: str = "clamp") -> np.ndarray:
-    """disenone's ``LightScattering`` loop (research §3.4) on the radiated occlusion, before exposure.
+    """disenone's ``LightScattering`` loop (SOURCES §3.4) on the radiated occlusion, before exposure.
 
     ``delta = (u - l) * (1/32 * density)``; the initial term is ``tex(u)``; then **31** steps of
     ``u -= delta``, ``+= tex(u) * ((dec * 0.03125) * weight)``, ``dec *= decay`` -- so the last tap
@@ -182,7 +182,7 @@ def radiate(occlusion, light_uv, radius_px: float = 100.0, peak: float = 0.5) ->
 
 
 def disenone_exposure(exposure: float, angle_deg: float, half_fov_deg: float) -> float:
-    """disenone's exposure dimming (research §3.4): 0 when ``angle + half_fov >= 90``, else
+    """disenone's exposure dimming (SOURCES §3.4): 0 when ``angle + half_fov >= 90``, else
     ``exposure * (1 - (max(angle, half_fov) - half_fov) / half_fov)``.
 
     ``angle_deg`` is the angle between the camera forward and the direction to the light,

@@ -85,7 +85,7 @@ def nearest_index(n_src: int, n_dst: int) -> np.ndarray:
 
     ``floor(u * n_src)`` with ``u = (i + 0.5) / n_dst``, i.e. ``floor((2i + 1) n_src / (2 n_dst))``,
     clamped to ``[0, n_src - 1]``. An exact texel edge goes to the *upper* texel (D3D's 8-bit
-    sub-texel fixed point, research §2.3/§6.5): with ``f = 2`` low-res texel ``j`` reads full-res
+    sub-texel fixed point, SOURCES §2.3/§6.5): with ``f = 2`` low-res texel ``j`` reads full-res
     texel ``2j + 1``, with ``f = 3`` texel ``3j + 1``, with ``f = 4`` texel ``4j + 2``; full-res
     texel ``i`` reads low-res texel ``floor(i / f)``.
     """
@@ -97,7 +97,7 @@ def point_texel(u, n: int, subtexel_bits: int = 8) -> np.ndarray:
     """Point-sampled texel index at uv ``u`` on ``n`` texels, clamp addressing.
 
     The texel coordinate ``u n`` is first rounded to ``subtexel_bits`` fractional bits (D3D's 8-bit
-    sub-texel precision [K], research §6.5), so a coordinate a rounding error below a texel edge
+    sub-texel precision [K], SOURCES §6.5), so a coordinate a rounding error below a texel edge
     reads the upper texel as the GPU does; then ``floor`` and clamp to ``[0, n - 1]``.
     """
     scale = float(1 << subtexel_bits)

@@ -162,7 +162,7 @@ def _vl_kernel(lo, zl, zh, ra, rb, ty, ca, cb, tx, threshold, out):
 
 
 def vl_upsample(lo, depth_lo, depth_hi, threshold: float = 1.5, uv_origin: str = "bottom") -> np.ndarray:
-    """VolumetricLights' ``BilateralUpsample`` (research §1.10), on linear eye depth in metres.
+    """VolumetricLights' ``BilateralUpsample`` (SOURCES §1.10), on linear eye depth in metres.
 
     The four low-res texels ``00, 10, 01, 11`` of the bilinear footprint (``1`` = ``+u`` / ``+v``)
     give ``d_k = |z_hi - z_k|``. If ``((d00 + d10) + d01) + d11 < threshold``
@@ -200,7 +200,7 @@ def _nearest_depth_kernel(lo, zl, zh, rows, cols, out):
 
 
 def urp_upsample(fog_lo, depth_lo, depth_hi, neighbours=URP_NEIGHBOURS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP tutorial's nearest-depth upsample (pass 3, research §2.7), on raw depth.
+    """The URP tutorial's nearest-depth upsample (pass 3, SOURCES §2.7), on raw depth.
 
     Full-res texel ``i`` starts from the low-res texel under it (``nearest_index``: ``floor(i / f)``)
     and considers only the cross neighbours ``(0,+1), (0,-1), (+1,0), (-1,0)`` (clamp addressing) --

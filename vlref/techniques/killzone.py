@@ -1,5 +1,5 @@
-"""The ``killzone`` technique: the thesis (seed 000) after Vos, "Volumetric Light Effects in Killzone:
-Shadow Fall" (GPU Pro 5; research §4), pass by pass.
+"""The ``killzone`` technique: the thesis (TH in docs/SOURCES.md) after Vos, "Volumetric Light Effects in Killzone:
+Shadow Fall" (GPU Pro 5; SOURCES §4), pass by pass.
 
 1. depth: linear eye depth min-downsampled to each calculation resolution in use (thesis §4.2.3:
    "finding the smallest value using a min function"): ``depth_half``, ``depth_quarter``;

@@ -1,4 +1,4 @@
-"""The ``physical`` technique: the energy-conserving single-scattering march of DESIGN.md.
+"""The ``physical`` technique: the energy-conserving single-scattering march of docs/PHYSICS.md "The integral".
 
 Buffers: ``inscatter`` (H, W, 3) = the sum of ``inscatter_light_<i>`` over lights (in light order),
 ``transmittance`` (H, W) = ``exp(-τ(0, t_end))``, ``final = scene_colour · transmittance + inscatter``

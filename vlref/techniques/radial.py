@@ -1,5 +1,5 @@
-"""The ``radial`` technique: GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port (seed 004),
-research §3.
+"""The ``radial`` technique: GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port,
+SOURCES §3.
 
 Passes (buffers at the occlusion target's size ``W_o x H_o``; ``H_o = occlusion_height`` or the frame
 height, ``W_o = floor(H_o · aspect)``):

@@ -1,4 +1,4 @@
-"""The ``slightlymad`` technique: SlightlyMad/VolumetricLights, pass by pass (research §1, seed 001).
+"""The ``slightlymad`` technique: SlightlyMad/VolumetricLights, pass by pass (SOURCES §1).
 
 Passes (``docs/TECHNIQUES.md`` lists formulas, constants and quirks):
 

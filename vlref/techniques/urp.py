@@ -1,5 +1,5 @@
-"""The ``urp`` technique: Valerio Marty's "Raymarched Volumetric Lighting in Unity URP (Part 1)" (seed 002,
-research §2; the article's listing P1), pass by pass.
+"""The ``urp`` technique: Valerio Marty's "Raymarched Volumetric Lighting in Unity URP (Part 1)" (Medium,
+SOURCES §2; the article's listing P1), pass by pass.
 
 0. march (low res, ``render.resolution`` off/half/third/quarter): :func:`vlref.march.urp.urp_march`
    on the world position reconstructed from the point-sampled raw full-res depth; the hash buffer is
