@@ -55,8 +55,8 @@ from ..geometry import closest_hit, shadow_transmittance
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    PackedLights)
 
-__all__ = ["ShadowMaps", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "shadow_visibility", "cascade_splits", "CUBE_FACES",
-           "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+__all__ = ["ShadowMaps", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "shadow_visibility", "cascade_splits",
+           "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
