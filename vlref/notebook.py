@@ -273,7 +273,7 @@ def time_call(fn: Callable[[], Any], repeat: int = 5, warmup: int = 1) -> tuple[
 def scaled_light_intensity(scene, factor: float):
     """``scene`` with every light's ``intensity`` multiplied by ``factor`` (>= 0)."""
     if not (factor >= 0.0 and math.isfinite(factor)):
-        raise InputError("<notebook>", "lights.intensity", f"scale factor must be finite and >= 0, got {factor!r}")
+        raise ValueError(f"scale factor must be finite and >= 0, got {factor!r}")
     return scene.replace(lights=tuple(dataclasses.replace(l, intensity=l.intensity * factor) for l in scene.lights))
 
 
@@ -348,7 +348,8 @@ def examples_dir() -> Path:
     for c in candidates:
         if (c / EXAMPLE_FILES["reference"]).is_file():
             return c
-    raise InputError("<installation>", "", "bundled examples not found (set VLREF_EXAMPLES)")
+    raise InputError(str(candidates[-1]), "", "bundled examples not found (looked in "
+                     + ", ".join(str(c) for c in candidates) + "; set VLREF_EXAMPLES)")
 
 
 def make_port_example(out_dir, scene: str = "pillars", width: int = 160, height: int = 90,

@@ -76,7 +76,7 @@ class Frame:
 
     ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
     :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
-    (:func:`vlref.oracle.port_buffers.port_frame`).
+    (:func:`vlref.port.port_frame`).
     """
 
     scene: Scene

@@ -31,7 +31,6 @@ import dataclasses
 import multiprocessing
 import os
 import signal
-import sys
 import time
 from typing import Callable, Iterator
 
@@ -210,27 +209,3 @@ def compile_ahead_in_background(scene) -> Iterator[Callable[[], None]]:
         if proc.is_alive():
             proc.terminate()
         proc.join()
-
-
-def main_warmup(argv: list[str]) -> int:
-    """``vlref warmup [--jobs N]``: compile every kernel with a progress bar; prints the time taken."""
-    import argparse
-
-    from tqdm import tqdm
-
-    p = argparse.ArgumentParser(prog="vlref warmup", description="compile every kernel into Numba's cache "
-                                "once (a later first render then starts at once); a second run only loads")
-    p.add_argument("--jobs", type=int, help="worker processes (default: the available cores)")
-    try:
-        args = p.parse_args(argv)
-    except SystemExit as exc:
-        return int(exc.code or 0)
-    start = time.perf_counter()
-    with tqdm(total=len(TASKS), desc="vlref warmup", unit="group", file=sys.stderr, leave=False) as bar:
-        def done(name):
-            bar.set_postfix_str(name, refresh=False)
-            bar.update(1)
-        warmup(args.jobs, done)
-    print(f"vlref warmup: {len(TASKS)} kernel groups compiled or loaded in {time.perf_counter() - start:.1f} s "
-          f"(cache: {cache_location()})", file=sys.stderr)
-    return 0

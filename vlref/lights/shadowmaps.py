@@ -55,8 +55,8 @@ from ..geometry import closest_hit, shadow_transmittance
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    PackedLights)
 
-__all__ = ["ShadowMaps", "build_shadow_maps", "shadow_visibility", "cascade_splits", "CUBE_FACES",
-           "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+__all__ = ["ShadowMaps", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "shadow_visibility", "cascade_splits",
+           "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
@@ -105,6 +105,16 @@ class ShadowMaps:
         ints[shadowed, S_MODE] = mode
         return ShadowMaps(ints, self.floats, self.data, self.tint, self.names)
 
+    def mode(self, light: int) -> int:
+        """The lookup mode of ``light`` (``SHADOW_NONE``, ``SHADOW_HARD``, ``SHADOW_PCF``, ``SHADOW_EXACT``)."""
+        return int(self.ints[light, S_MODE])
+
+    def cascade(self, light: int, k: int) -> tuple[np.ndarray, float, float]:
+        """``(centre (3,), radius, back)`` of cascade ``k`` of directional ``light``: its bounding sphere and
+        the distance from the map's near plane to the centre (metres)."""
+        c = self.floats[light, S_CASC + 5 * k:S_CASC + 5 * k + 5]
+        return c[:3], float(c[3]), float(c[4])
+
     def buffers(self) -> dict[str, np.ndarray]:
         """Every map as a named (res, res) float32 buffer, plus ``<name>_transparent_distance`` (res, res)
         and ``<name>_transmittance`` (res, res, 3) for maps with a transparent layer."""
@@ -117,6 +127,45 @@ class ShadowMaps:
                 out[name + "_transparent_distance"] = layer[:, :, 0]
                 out[name + "_transmittance"] = layer[:, :, 1:]
         return out
+
+
+@dataclass(frozen=True)
+class LightMaps:
+    """One light's maps given as texels rather than cast (a GPU port's, :mod:`vlref.port.shadows`).
+
+    ``tiles``: ``(buffer name, texels (res * res,) float32)`` in vlref's order (one spot map, the six cube
+    faces in ``CUBE_FACES`` order, or the cascades), each texel the biased distance of the module docstring;
+    ``cascades``: ``(centre (3,), radius, back)`` per cascade (directional lights only, else empty).
+    """
+
+    light: int
+    mode: int
+    strength: float
+    tiles: tuple
+    cascades: tuple = ()
+
+
+def pack_shadow_maps(count: int, maps) -> ShadowMaps:
+    """:class:`ShadowMaps` of ``count`` lights from :class:`LightMaps` (lights not listed: unshadowed);
+    no transparent layer."""
+    ints = np.zeros((count, NSI), dtype=np.int64)
+    floats = np.zeros((count, NSF))
+    chunks, names, offset = [], [], 0
+    for m in maps:
+        ints[m.light, S_MODE] = m.mode
+        floats[m.light, S_STRENGTH] = m.strength
+        for k, (name, texels) in enumerate(m.tiles):
+            if k == 0:
+                ints[m.light, S_RES], ints[m.light, S_OFFSET] = int(round(math.sqrt(texels.size))), offset
+            chunks.append(texels)
+            names.append((name, m.light, offset, texels.size))
+            offset += texels.size
+        for k, (centre, radius, back) in enumerate(m.cascades):
+            floats[m.light, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)
+        if m.cascades:
+            ints[m.light, S_CASCADES] = len(m.cascades)
+    data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
+    return ShadowMaps(ints, floats, data, np.zeros((0, 4), dtype=np.float32), names)
 
 
 def cascade_splits(near: float, far: float, count: int, split_lambda: float) -> np.ndarray:

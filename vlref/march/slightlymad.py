@@ -29,7 +29,6 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..errors import InputError
 from ..lights.attenuation import distance_attenuation
 from ..lights.cone import cone_falloff
 from ..lights.cookies import sample_texture, spot_cookie_uv
@@ -55,7 +54,7 @@ def dither_k(size: int) -> np.ndarray:
         return bayer_matrix(8).T + 1
     if size == 4:
         return bayer_matrix(4)
-    raise InputError("<arguments>", "dither", f"VL's dither texture is 8x8 or 4x4, got {size}")
+    raise ValueError(f"VL's dither texture is 8x8 or 4x4, got {size}")
 
 
 def dither_table(size: int = 8) -> np.ndarray:

@@ -25,8 +25,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice, check_positive, nearest_index, point_texel, uv_row_map
+from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
 """``FULL/HALF/QUARTER_RES_BLUR_KERNEL_SIZE`` of VL's ``BilateralBlur.shader``."""
@@ -134,7 +133,7 @@ def _run_blur(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor=1.0, ep
 def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
     """``G(i) = exp(-i^2 / (2 sigma^2)) / sqrt(2 pi sigma^2)``, ``i = 0..radius`` (VL ``GaussianWeight``)."""
     if radius < 0 or not sigma > 0:
-        raise InputError(ARGUMENTS, "blur", f"need radius >= 0 and sigma > 0, got {radius}, {sigma}")
+        raise ValueError(f"blur: need radius >= 0 and sigma > 0, got {radius}, {sigma}")
     i = np.arange(radius + 1, dtype=np.float64)
     return (1.0 / math.sqrt(2.0 * math.pi * sigma * sigma)) * np.exp(-(i * i) / (2.0 * sigma * sigma))
 
@@ -142,7 +141,7 @@ def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
 def _values(values) -> np.ndarray:
     v = np.asarray(values, dtype=np.float64)
     if v.ndim not in (2, 3):
-        raise InputError(ARGUMENTS, "values", f"expected (H, W) or (H, W, C), got shape {v.shape}")
+        raise ValueError(f"values: expected (H, W) or (H, W, C), got shape {v.shape}")
     return v
 
 
@@ -159,9 +158,9 @@ def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, d
     v = _values(values)
     z = np.asarray(depth, dtype=np.float64)
     if z.shape != v.shape[:2]:
-        raise InputError(ARGUMENTS, "depth", f"depth shape {z.shape} does not match values {v.shape[:2]}")
+        raise ValueError(f"depth: depth shape {z.shape} does not match values {v.shape[:2]}")
     if keep_alpha and v.ndim != 3:
-        raise InputError(ARGUMENTS, "values", "keep_alpha needs an (H, W, C) buffer")
+        raise ValueError("values: keep_alpha needs an (H, W, C) buffer")
     code = _weight_code(depth_weight_kind, depth_factor, epsilon)
     g = np.asarray(gauss, dtype=np.float64)
     radius = len(g) - 1
@@ -200,7 +199,7 @@ def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: 
     check_choice("resolution", resolution, tuple(VL_KERNEL_RADIUS))
     v = _values(values)
     if v.ndim != 3 or v.shape[2] != 4:
-        raise InputError(ARGUMENTS, "values", f"VL blurs an (H, W, 4) RGBA buffer, got shape {v.shape}")
+        raise ValueError(f"values: VL blurs an (H, W, 4) RGBA buffer, got shape {v.shape}")
     k = VL_KERNEL_RADIUS[resolution] if kernel_radius is None else kernel_radius
     return bilateral_pass(v, depth, axis, gaussian_weights(k, k / deviation), depth_factor, keep_alpha=True)
 
@@ -208,7 +207,7 @@ def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: 
 def _urp_gauss(taps: int, weights) -> np.ndarray:
     g = np.asarray(weights, dtype=np.float64)
     if not 0 <= taps <= len(g) - 1:
-        raise InputError(ARGUMENTS, "samples", f"taps each side must be in 0..{len(g) - 1}, got {taps}")
+        raise ValueError(f"samples: taps each side must be in 0..{len(g) - 1}, got {taps}")
     return g
 
 
@@ -217,7 +216,7 @@ def _urp_axes(fog, depth_full, axis: int):
     f = _values(fog)
     z = np.asarray(depth_full, dtype=np.float64)
     if z.ndim != 2 or z.shape[0] < f.shape[0] or z.shape[1] < f.shape[1]:
-        raise InputError(ARGUMENTS, "depth", f"full-res depth {z.shape} cannot feed low-res fog {f.shape[:2]}")
+        raise ValueError(f"depth: full-res depth {z.shape} cannot feed low-res fog {f.shape[:2]}")
     return f, z
 
 

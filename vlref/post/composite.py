@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice
+from vlref.post.resolution import check_choice
 
 FP16_MAX = 65504.0
 
@@ -31,7 +30,7 @@ def _per_pixel(a, like: np.ndarray) -> np.ndarray:
     """An (H, W) factor broadcast over the channel axis of ``like``."""
     a = np.asarray(a, dtype=np.float64)
     if a.shape != like.shape[:2]:
-        raise InputError(ARGUMENTS, "factor", f"per-pixel factor {a.shape} does not match image {like.shape[:2]}")
+        raise ValueError(f"factor: per-pixel factor {a.shape} does not match image {like.shape[:2]}")
     return a[..., None]
 
 
@@ -51,7 +50,7 @@ def composite_vl(scene, volume) -> np.ndarray:
     scene = np.asarray(scene, dtype=np.float64)
     volume = np.asarray(volume, dtype=np.float64)
     if volume.ndim != 3 or volume.shape[2] != 4 or scene.ndim != 3 or scene.shape[2] not in (3, 4):
-        raise InputError(ARGUMENTS, "volume", f"need scene (H, W, 3|4) and volume (H, W, 4), got "
+        raise ValueError(f"volume: need scene (H, W, 3|4) and volume (H, W, 4), got "
                                               f"{scene.shape} and {volume.shape}")
     va = volume[..., 3:4]
     out = scene.copy()

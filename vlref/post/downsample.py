@@ -19,8 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vlref.errors import InputError
-from vlref.post.resolution import (ARGUMENTS, block_ranges, check_choice, gather_footprint, low_res_size,
+from vlref.post.resolution import (block_ranges, check_choice, gather_footprint, low_res_size,
                                    nearest_index, resolution_factor, uv_rows)
 
 
@@ -35,7 +34,7 @@ def _block_reduce(a: np.ndarray, n_lo: int, axis: int, ufunc) -> np.ndarray:
 def _check_depth(depth) -> np.ndarray:
     depth = np.asarray(depth)
     if depth.ndim != 2:
-        raise InputError(ARGUMENTS, "depth", f"expected an (H, W) depth buffer, got shape {depth.shape}")
+        raise ValueError(f"depth: expected an (H, W) depth buffer, got shape {depth.shape}")
     return depth
 
 

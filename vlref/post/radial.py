@@ -28,8 +28,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice
+from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
 
@@ -37,7 +36,7 @@ ADDRESS_MODES = ("clamp", "repeat", "border")
 def _image(image) -> np.ndarray:
     a = np.asarray(image, dtype=np.float64)
     if a.ndim not in (2, 3):
-        raise InputError(ARGUMENTS, "image", f"expected (H, W) or (H, W, C), got shape {a.shape}")
+        raise ValueError(f"image: expected (H, W) or (H, W, C), got shape {a.shape}")
     return a
 
 
@@ -123,9 +122,9 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
     check_choice("address", address, ADDRESS_MODES)
     img = _image(image)
     if divisor < 1 or iterations < 0:
-        raise InputError(ARGUMENTS, "num_samples", f"need at least one sample, got {divisor}")
+        raise ValueError(f"num_samples: need at least one sample, got {divisor}")
     if not np.isfinite(light_uv).all():
-        raise InputError(ARGUMENTS, "light_uv", f"must be finite, got {light_uv!r} (use light_screen_uv)")
+        raise ValueError(f"light_uv: must be finite, got {light_uv!r} (use light_screen_uv)")
     img3 = np.ascontiguousarray(img if img.ndim == 3 else img[..., None])
     out = _radial_kernel(img3, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
                          float(weight), float(tap_scale), float(decay), ADDRESS_MODES.index(address))

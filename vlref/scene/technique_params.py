@@ -13,10 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Optional
 
-
-def F(default, doc: str = "", **meta):
-    meta["doc"] = doc
-    return field(default=default, metadata=meta)
+from .fields import F
 
 
 @dataclass(frozen=True)

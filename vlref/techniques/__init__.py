@@ -3,7 +3,7 @@
 :data:`TECHNIQUES` maps each name to a :class:`Technique`: its render function, its parameter class
 (the ``[techniques.NAME]`` table, :mod:`vlref.scene.technique_params`), the golden suite's rule of which
 scenes it applies to, its optional notes and its peak memory per pixel. The orchestrator
-(:func:`vlref.render.render`), the port path (:mod:`vlref.oracle.port_buffers`), the notebook helpers,
+(:func:`vlref.render.render`), the port path (:mod:`vlref.port`), the notebook helpers,
 the golden suite and the memory check dispatch through it; the scene model's accepted names are the
 fields of :class:`~vlref.scene.technique_params.TechniqueParams` (the scene layer lies below the
 techniques), and ``tests/test_technique_registry.py`` holds the two lists equal.
