@@ -1,4 +1,4 @@
-"""Froxel temporal figures of BENCHMARKS.md "Froxel temporal" (issue 14).
+"""Froxel temporal figures of BENCHMARKS.md "Froxel temporal".
 
 ``python benchmarks/froxel_temporal.py ghosting``: frames 0-7 of each bundled animated scene at 64x36,
 grid 32x18x32, default α; mean relative inscatter error of the temporal sequence without and with

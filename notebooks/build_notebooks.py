@@ -136,21 +136,24 @@ from vlref.errors import InputError
 from vlref.notebook import Choice, PreviewRenderer, Slider, Toggle, interact_or_static, live_widgets, \\
     scaled_light_intensity, time_call
 from vlref.phase import hg_array
+from vlref.techniques import TECHNIQUES
 
 print("live widgets:", live_widgets())"""),
     ("md", """\
 ## How the controls map onto each technique
 
-| control | physical, killzone | slightlymad | urp | radial |
-|---|---|---|---|---|
-| scattering σs, absorption σa | `medium` | `medium` (`techniques.slightlymad.medium = "scene"`) | — (no density) | — |
-| anisotropy g | `medium.anisotropy` | `medium.anisotropy` (same switch) | `scattering = -g` (the tutorial's sign) | — |
-| light power | every light's `intensity` × factor | same | same | same |
-| steps | `render.steps` | `render.steps` (≤ 64) | `render.steps` (≥ 2) | — |
-| sampling | `render.sampling` (killzone: no `hash`) | `dither` (`none`/`bayer4`/`bayer8`) | — (own jitter) | — |
-| resolution | killzone: `render.resolution` (physical: full) | `render.resolution` | `render.resolution` | — |
-| blur | killzone `blur` | `blur` | `gauss_samples = 0` when off | — |
-| VL depth downsample | — | `depth_downsample` | — | — |
+The technique control lists every registered technique (`vlref.techniques.TECHNIQUES`).
+
+| control | physical, killzone | slightlymad | urp | radial | froxel |
+|---|---|---|---|---|---|
+| scattering σs, absorption σa | `medium` | `medium` (`techniques.slightlymad.medium = "scene"`) | — (no density) | — | `medium` |
+| anisotropy g | `medium.anisotropy` | `medium.anisotropy` (same switch) | `scattering = -g` (the tutorial's sign) | — | `medium.anisotropy` |
+| light power | every light's `intensity` × factor | same | same | same | same |
+| steps | `render.steps` | `render.steps` (≤ 64) | `render.steps` (≥ 2) | — | light leg: `ceil(sqrt(steps))` |
+| sampling | `render.sampling` (killzone: no `hash`) | `dither` (`none`/`bayer4`/`bayer8`) | — (own jitter) | — | — (own jitter) |
+| resolution | killzone: `render.resolution` (physical: full) | `render.resolution` | `render.resolution` | — | — (own grid) |
+| blur | killzone `blur` | `blur` | `gauss_samples = 0` when off | — | — |
+| VL depth downsample | — | `depth_downsample` | — | — | — |
 
 A setting a technique cannot take (e.g. `third` resolution for killzone, `urp` on a scene without a
 directional light) shows the error vlref raises instead of an image."""),
@@ -215,7 +218,7 @@ below it."""),
     ("code", """\
 CONTROLS = {
     "scene": Choice(tuple(SCENES), "pillars"),
-    "technique": Choice(("physical", "killzone", "slightlymad", "urp", "radial"), "killzone"),
+    "technique": Choice(tuple(TECHNIQUES), "killzone"),
     "scattering": Slider(0.0, 0.5, 0.08, step=0.005, description="scattering σs (1/m)"),
     "absorption": Slider(0.0, 0.5, 0.01, step=0.005, description="absorption σa (1/m)"),
     "anisotropy": Slider(-0.95, 0.95, 0.5, step=0.05, description="anisotropy g"),

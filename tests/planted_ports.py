@@ -10,7 +10,6 @@ returns the port's ``final`` image. ``correct_port`` is the faithful port: the s
 from __future__ import annotations
 
 import dataclasses
-import importlib
 from dataclasses import dataclass
 from typing import Callable
 
@@ -19,6 +18,7 @@ import numpy as np
 from vlref.post.blur import depth_delta
 from vlref.post.resolution import bilinear_footprint
 from vlref.render import prepare_frame
+from vlref.techniques import TECHNIQUES
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class Case:
 
 def _run(scene, frame=None) -> dict:
     frame = prepare_frame(scene) if frame is None else frame
-    return importlib.import_module(f"vlref.techniques.{scene.render.technique}").render(scene, frame)
+    return TECHNIQUES[scene.render.technique].render(scene, frame)
 
 
 def correct_port(scene) -> np.ndarray:

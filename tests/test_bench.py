@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from vlref.bench import SECTIONS, main_bench
+from vlref.bench import SECTIONS
+from vlref.cli import main
 from vlref.geometry import build_geometry, closest_hit, shadow_transmittance
 from vlref.scene.model import Box, Cylinder, Light, Material, Plane, Scene, Sphere
 
@@ -29,7 +30,7 @@ def numbers(node, path=""):
 @pytest.fixture(scope="module")
 def report(tmp_path_factory):
     out = tmp_path_factory.mktemp("bench") / "bench.json"
-    assert main_bench(["--quick", "--json", "-o", str(out)]) == 0
+    assert main(["bench", "--quick", "--json", "-o", str(out)]) == 0
     return json.loads(out.read_text())
 
 

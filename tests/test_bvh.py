@@ -7,7 +7,7 @@ import numpy as np
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vlref.geometry.bvh import SAH_DEPTH, build_bvh, bvh_closest, bvh_transmittance
+from vlref.geometry.bvh import SAH_DEPTH, _sort_by_key, build_bvh, bvh_closest, bvh_transmittance
 from vlref.geometry.primitives import hit_triangle
 
 
@@ -98,6 +98,18 @@ def test_structure(seed, n, clustered, max_leaf):
             assert np.all(bvh.node_min[child] >= bvh.node_min[k] - 1e-12)
             assert np.all(bvh.node_max[child] <= bvh.node_max[k] + 1e-12)
     assert bvh.depth <= SAH_DEPTH + math.log2(n) + 2
+
+
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 200), s=st.integers(0, 5), distinct=st.integers(1, 6))
+def test_median_fallback_sort_is_numpys_stable_argsort(seed, n, s, distinct):
+    """The median split's in-place sort of ``idx[s:e]`` by key: ties keep their order, as NumPy's stable sort."""
+    rng = np.random.default_rng(seed)
+    key = rng.integers(0, distinct, size=n + s + 3).astype(np.float64)
+    idx = rng.permutation(n + s + 3)
+    want = idx.copy()
+    want[s:s + n] = idx[s:s + n][np.argsort(key[idx[s:s + n]], kind="stable")]
+    _sort_by_key(idx, s, s + n, key)
+    assert np.array_equal(idx, want)
 
 
 def test_empty_input():

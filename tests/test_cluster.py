@@ -22,7 +22,7 @@ import pytest
 
 from vlref.cli import main
 from vlref.cluster import local_cluster
-from vlref.oracle.golden import SUITE_FILE, main_golden, verify
+from vlref.oracle.golden import SUITE_FILE, verify
 from vlref.reference import render_reference
 from vlref.reference.tiles import render_reference_tiled
 from vlref.scene import load_scene
@@ -54,8 +54,8 @@ def test_reference_tiles_on_the_cluster_equal_the_in_process_bytes(tmp_path, clu
 
 def test_golden_build_and_verify_on_the_cluster_equal_in_process(tmp_path, cluster):
     address, _ = cluster
-    assert main_golden(["build", "-q", "--dir", str(tmp_path / "a"), *GOLDEN_SUBSET]) == 0
-    assert main_golden(["build", "-q", "--dir", str(tmp_path / "b"), *GOLDEN_SUBSET, "--scheduler", address]) == 0
+    assert main(["golden", "build", "-q", "--dir", str(tmp_path / "a"), *GOLDEN_SUBSET]) == 0
+    assert main(["golden", "build", "-q", "--dir", str(tmp_path / "b"), *GOLDEN_SUBSET, "--scheduler", address]) == 0
     a, b = _files(tmp_path / "a"), _files(tmp_path / "b")
     assert len(a) == 1 + 3 * 3  # manifest + 3 entries x 3 buffers
     assert a == b
@@ -101,7 +101,7 @@ def test_failures_are_reported_by_item_and_nothing_is_written(tmp_path, cluster,
     suite.write_text(SUITE_FILE.read_text().replace('buffers = ["final", "inscatter", "transmittance"]',
                                                     'buffers = ["final", "nosuch"]'))
     out = tmp_path / "golden"
-    assert main_golden(["build", "-q", "--dir", str(out), "--suite", str(suite), "--only", "pillars/physical",
+    assert main(["golden", "build", "-q", "--dir", str(out), "--suite", str(suite), "--only", "pillars/physical",
                         "--only", "pillars/killzone", "--scheduler", address]) == 2
     err = capsys.readouterr().err
     assert "2 item(s) failed" in err and "pillars/physical: InputError" in err and "pillars/killzone: InputError" in err

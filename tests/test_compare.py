@@ -11,7 +11,8 @@ import pytest
 
 from vlref import io as vio
 from vlref.errors import InputError
-from vlref.oracle import compare_arrays, compare_files, load_presets, main_compare, tolerance
+from vlref.cli import main
+from vlref.oracle import compare_arrays, compare_files, load_presets, tolerance
 from vlref.oracle.metrics import error_metrics, failing_pixels, hdr_flip
 from vlref.oracle.presets import Tolerance
 from vlref.oracle.report import colour_map, json_ready
@@ -337,18 +338,18 @@ def test_failed_output_writing_leaves_no_folder(tmp_path, monkeypatch):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["ref.exr", "test.exr"]
 
 
-def test_main_compare_exit_codes(tmp_path, capsys):
+def test_compare_command_exit_codes(tmp_path, capsys):
     ref = _hdr(16)
     r, t = _files(tmp_path, ref, ref * np.float32(1 + 2 ** -22))
-    assert main_compare([str(r), str(t)]) == 0
+    assert main(["compare", str(r), str(t)]) == 0
     assert "PASS" in capsys.readouterr().out
     bad = tmp_path / "bad.exr"
     vio.write_exr(bad, ref * 1.1)
-    assert main_compare([str(r), str(bad), "-q"]) == 1
+    assert main(["compare", str(r), str(bad), "-q"]) == 1
     assert capsys.readouterr().out == ""
-    assert main_compare([str(r), str(bad), "--preset", "gpu-quarter", "--set", "rel_tol=0.2",
+    assert main(["compare", str(r), str(bad), "--preset", "gpu-quarter", "--set", "rel_tol=0.2",
                          "--set", "max_mean_abs=0.2"]) == 0
-    assert main_compare([str(r), str(bad), "--set", "rel_tol=0.2", "--set", "max_mean_abs=1",
+    assert main(["compare", str(r), str(bad), "--set", "rel_tol=0.2", "--set", "max_mean_abs=1",
                          "--set", "max_flip_mean=0.0001", "-o", str(tmp_path / "o")]) == 1
     assert (tmp_path / "o" / "report.html").is_file()
     capsys.readouterr()
@@ -359,6 +360,6 @@ def test_main_compare_exit_codes(tmp_path, capsys):
                           ([str(r), str(t), "--set", "rel_tol"], "expected KEY=VALUE"),
                           ([str(r), str(t), "--border", "-1"], "border"),
                           ([str(r)], "")):
-        assert main_compare(argv) == 2, argv
+        assert main(["compare", *argv]) == 2, argv
         assert message in capsys.readouterr().err
     assert not (tmp_path / "missing.exr").exists()

@@ -10,8 +10,10 @@ import pytest
 from vlref.io import read_image, write_exr
 from pathlib import Path
 
-from vlref.oracle.golden import MANIFEST, applies, load_suite, main_golden, suite_entries
+from vlref.cli import main
+from vlref.oracle.golden import MANIFEST, load_suite, suite_entries
 from vlref.scene import bundled_scenes, load_scene
+from vlref.techniques.radial import light_in_frame
 
 ONE = "pillars/physical"
 GOLDEN_DIR = Path(__file__).resolve().parents[1] / "data" / "golden"  # the checkout's goldens, installed or not
@@ -20,8 +22,8 @@ DIR = ["--dir", str(GOLDEN_DIR)]
 
 def test_golden_suite(request):
     if request.config.getoption("--update-goldens"):
-        assert main_golden(["build", "-q", *DIR]) == 0
-    assert main_golden(["verify", "-q", *DIR]) == 0
+        assert main(["golden", "build", "-q", *DIR]) == 0
+    assert main(["golden", "verify", "-q", *DIR]) == 0
     size = sum(p.stat().st_size for p in GOLDEN_DIR.rglob("*") if p.is_file())
     assert size < 20e6
 
@@ -44,7 +46,7 @@ def test_tampered_file_fails_on_checksum(golden_copy, capsys):
     data = bytearray(path.read_bytes())
     data[-1] ^= 0x01
     path.write_bytes(bytes(data))
-    assert main_golden(["verify", "--dir", str(golden_copy), "--only", ONE]) == 1
+    assert main(["golden", "verify", "--dir", str(golden_copy), "--only", ONE]) == 1
     assert "checksum" in capsys.readouterr().out
 
 
@@ -58,7 +60,7 @@ def test_changed_render_fails_even_with_a_matching_checksum(golden_copy, capsys)
     write_exr(path, img * np.float32(1.001))  # 0.1 %: 10x the float32 preset's relative tolerance
     record["files"]["inscatter"]["sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
     (golden_copy / MANIFEST).write_text(json.dumps(manifest))
-    assert main_golden(["verify", "--dir", str(golden_copy), "--only", ONE]) == 1
+    assert main(["golden", "verify", "--dir", str(golden_copy), "--only", ONE]) == 1
     out = capsys.readouterr().out
     assert "inscatter: differs beyond preset float32" in out and "checksum" not in out
 
@@ -67,28 +69,28 @@ def test_stale_suite_and_scene_fail(golden_copy, tmp_path, capsys):
     suite = tmp_path / "suite.toml"
     from vlref.oracle.golden import SUITE_FILE
     suite.write_text(SUITE_FILE.read_text().replace("steps = 8", "steps = 9"))
-    assert main_golden(["verify", "--dir", str(golden_copy), "--suite", str(suite), "--only", ONE]) == 1
+    assert main(["golden", "verify", "--dir", str(golden_copy), "--suite", str(suite), "--only", ONE]) == 1
     assert "suite settings changed" in capsys.readouterr().out
     manifest, record = _record(golden_copy, ONE)
     record["scene_hash"] = "0" * 64
     (golden_copy / MANIFEST).write_text(json.dumps(manifest))
-    assert main_golden(["verify", "--dir", str(golden_copy), "--only", ONE]) == 1
+    assert main(["golden", "verify", "--dir", str(golden_copy), "--only", ONE]) == 1
     assert "scene changed" in capsys.readouterr().out
 
 
 def test_bad_input_exits_2(tmp_path):
-    assert main_golden(["verify", "--dir", str(tmp_path)]) == 2  # no manifest
+    assert main(["golden", "verify", "--dir", str(tmp_path)]) == 2  # no manifest
     (tmp_path / MANIFEST).write_text("{not json")
-    assert main_golden(["verify", "--dir", str(tmp_path)]) == 2
-    assert main_golden(["frobnicate"]) == 2
+    assert main(["golden", "verify", "--dir", str(tmp_path)]) == 2
+    assert main(["golden", "frobnicate"]) == 2
 
 
 def test_build_only_one_entry_then_verify(tmp_path):
-    assert main_golden(["build", "-q", "--dir", str(tmp_path), "--only", ONE]) == 0
+    assert main(["golden", "build", "-q", "--dir", str(tmp_path), "--only", ONE]) == 0
     manifest = json.loads((tmp_path / MANIFEST).read_text())
     assert [e["name"] for e in manifest["entries"]] == [ONE]
-    assert main_golden(["verify", "-q", "--dir", str(tmp_path), "--only", ONE]) == 0
-    assert main_golden(["verify", "-q", "--dir", str(tmp_path)]) == 1  # the other entries are missing
+    assert main(["golden", "verify", "-q", "--dir", str(tmp_path), "--only", ONE]) == 0
+    assert main(["golden", "verify", "-q", "--dir", str(tmp_path)]) == 1  # the other entries are missing
 
 
 def test_applicability_rules():
@@ -105,14 +107,14 @@ def test_applicability_rules():
             assert (name, t) in entries
         has_sun = any(l.type == "directional" for l in scene.lights)
         assert ((name, "urp") in entries) == has_sun
-        assert ((name, "radial") in entries) == applies(scene, "radial")
+        assert ((name, "radial") in entries) == light_in_frame(scene)
     # an independent check of the radial rule: the light's NDC lies inside [-1, 1]^2 in front of the camera
     from vlref.camera import camera_from_settings
     scene = load_scene("behind_camera")
     cam = camera_from_settings(scene.camera, 64, 36)
     view = cam.view_matrix() @ np.array([*scene.lights[0].position, 1.0])
-    assert view[2] < 0 and not applies(scene, "radial")
+    assert view[2] < 0 and not light_in_frame(scene)
     scene = load_scene("radial_sun")
     cam_ndc = camera_from_settings(scene.camera, 64, 36).world_to_ndc(
         np.asarray(scene.camera.position) - 1e6 * np.asarray(scene.lights[0].direction))
-    assert np.all(np.abs(cam_ndc[:2]) <= 1) and applies(scene, "radial")
+    assert np.all(np.abs(cam_ndc[:2]) <= 1) and light_in_frame(scene)

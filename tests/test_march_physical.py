@@ -281,7 +281,7 @@ def test_height_fog_march_equals_its_step_sum(base, falloff, look_down):
 
 
 def test_steps_are_placed_inside_the_medium_box():
-    """Issue 12: a point light of range 1000 m inside an 8 m ``medium.bounds`` box (inverse square, g = 0.3).
+    """A point light of range 1000 m inside an 8 m ``medium.bounds`` box (inverse square, g = 0.3).
     The march clips each segment to the box before placing its steps, so 1024 steps resolve the 8 m of
     medium rather than 1000 m of empty space: median relative error < 1e-3, max < 1e-2 against the
     quadrature reference (whose error bound is 1e-7 relative)."""

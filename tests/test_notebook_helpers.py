@@ -8,7 +8,6 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vlref.errors import InputError
 from vlref.io import read_image, srgb8
 from vlref.notebook import (EXAMPLE_FILES, Choice, PreviewRenderer, Slider, Toggle, auto_exposure,
                             display_buffer, display_rgb, display_scalar, examples_dir, interact_or_static,
@@ -147,7 +146,7 @@ def test_scaled_light_intensity():
     doubled = scaled_light_intensity(scene, 2.0)
     assert [l.intensity for l in doubled.lights] == [2.0 * l.intensity for l in scene.lights]
     assert doubled.medium == scene.medium
-    with pytest.raises(InputError):
+    with pytest.raises(ValueError, match="scale factor"):
         scaled_light_intensity(scene, -1.0)
 
 

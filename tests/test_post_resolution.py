@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 
-from vlref.errors import InputError
 from vlref.post.resolution import (block_ranges, bilinear_footprint, gather_footprint, low_res_size, nearest_index,
                                    point_texel, resolution_factor, uv_row_map, uv_rows)
 
@@ -24,7 +23,7 @@ def test_low_res_size_is_floor():
 
 @pytest.mark.parametrize("args", [(3, 8, "quarter"), (8, 8, "eighth"), (8, 8, 0), (8, 8, True)])
 def test_bad_resolution_raises(args):
-    with pytest.raises(InputError):
+    with pytest.raises(ValueError):
         low_res_size(*args)
 
 
@@ -35,7 +34,7 @@ def test_nearest_index_is_floor_of_uv(n_src, n_dst):
 
 
 def test_nearest_index_source_texels():
-    # research §2.3: half -> 2j+1, third -> 3j+1, quarter -> 4j+2; full-res i reads low-res floor(i/f)
+    # SOURCES §2.3: half -> 2j+1, third -> 3j+1, quarter -> 4j+2; full-res i reads low-res floor(i/f)
     assert nearest_index(16, 8).tolist() == [2 * j + 1 for j in range(8)]
     assert nearest_index(24, 8).tolist() == [3 * j + 1 for j in range(8)]
     assert nearest_index(32, 8).tolist() == [4 * j + 2 for j in range(8)]
@@ -94,7 +93,7 @@ def test_uv_rows_flips_only_for_bottom_origin():
     assert (uv_rows(a, "top") == a).all()
     assert (uv_rows(a, "bottom") == a[::-1]).all()
     assert (uv_rows(uv_rows(a, "bottom"), "bottom") == a).all()
-    with pytest.raises(InputError):
+    with pytest.raises(ValueError):
         uv_rows(a, "left")
 
 

@@ -1,4 +1,4 @@
-"""Techniques side by side (issue 17, item 1): every technique's default render of every bundled scene it
+"""Techniques side by side: every technique's default render of every bundled scene it
 applies to has a usable PNG preview (automatic exposure), and its HDR level lies within 10x of
 ``physical`` on the same scene unless docs/TECHNIQUES.md states the ratio and the reason."""
 
@@ -11,9 +11,8 @@ import pytest
 
 from vlref.cli import main
 from vlref.io import luminance, png_text, read_image
-from vlref.oracle.golden import applies
 from vlref.scene import bundled_scenes, load_scene
-from vlref.scene.model import TECHNIQUES
+from vlref.techniques import TECHNIQUES
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "TECHNIQUES.md"
 SIZE = ["render.width=64", "render.height=36"]
@@ -42,8 +41,8 @@ def test_previews_are_exposed_and_levels_match_physical_or_the_documented_reason
                    if l.shadows is not None and l.shadows.resolution > 128]
     documented = documented_levels()
     levels = {}
-    for technique in TECHNIQUES:
-        if not applies(base, technique):
+    for technique, entry in TECHNIQUES.items():
+        if not entry.applies(base):
             continue
         level, png, text = _level_and_png(tmp_path, name, technique, sets)
         levels[technique] = level

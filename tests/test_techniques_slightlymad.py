@@ -9,7 +9,7 @@ from vlref.render import prepare_frame
 from vlref.scene.load import load_scene
 from vlref.techniques import slightlymad
 
-# research §1.5, rows y = 0..7 from the texture's bottom (v = 0)
+# SOURCES §1.5, rows y = 0..7 from the texture's bottom (v = 0)
 VL_DITHER_8 = """
   3 192  51 239  15 204  62 251
 129  66 176 113 141  78 188 125
@@ -100,6 +100,13 @@ def test_point_srgb_quirk_darkens_a_dim_point_light():
     q = _render(dim, frame, point_srgb_quirk=True)["inscatter"]
     n = _render(dim, frame, point_srgb_quirk=False)["inscatter"]
     assert np.all(q <= n) and np.any(q < n)
+    # the march is linear in the light's colour x intensity c, so each channel scales by exactly
+    # srgb_to_linear(c) / c (to rounding)
+    c = np.asarray(dim.lights[0].color) * dim.lights[0].intensity
+    lit = n > 0.0
+    expected = np.broadcast_to(slightlymad.srgb_to_linear(c) / c, n.shape)
+    assert lit.any()
+    np.testing.assert_allclose(q[lit] / n[lit], expected[lit], rtol=1e-12, atol=0.0)
 
 
 def test_skybox_extinction_quirk_lifts_sky_alpha():

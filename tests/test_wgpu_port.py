@@ -68,12 +68,12 @@ def test_faithful_port_passes_every_pass_with_zero_failing_pixels(faithful):
 
 def test_cli_compare_on_the_exported_final(faithful, tmp_path):
     """The walk-through's last command, `vlref compare REF TEST --preset gpu-half`, on the port's file."""
-    from vlref.oracle.compare import main_compare
+    from vlref.cli import main
 
     _, _, marched, out = faithful
-    assert main_compare([str(marched / "final.exr"), str(out / "port" / "port_final.npy"), "--preset", "gpu-half",
+    assert main(["compare", str(marched / "final.exr"), str(out / "port" / "port_final.npy"), "--preset", "gpu-half",
                          "-q"]) == 0
-    assert main_compare([str(marched / "final.exr"), str(out / "port" / "port_final.npy"), "--preset", "float32",
+    assert main(["compare", str(marched / "final.exr"), str(out / "port" / "port_final.npy"), "--preset", "float32",
                          "-q"]) == 1   # fp16 targets are beyond the float32 preset
 
 

@@ -12,10 +12,12 @@ The package is laid out as the pipeline it computes::
     techniques/ one module per technique wiring the passes with its constants
     reference/  quadrature ground truth and closed forms
     oracle/     image comparison, tolerance presets, golden suite
+    port/       a GPU port's own buffers: manifest, decoding, shadow import, export, the march on them
     io.py       EXR / PNG / NPY / NPZ
-    cli.py      the ``vlref`` command
+    cli/        the ``vlref`` command: every argument parser, one module per sub-command
+    bench/      ``vlref bench``: throughput of every stage, by section
     progress.py long kernels run band by band of rows: progress reports, Ctrl-C between bands
-    warmup.py   ``vlref warmup`` (compile every kernel once) and the march compiled ahead of a cold render
+    warmup.py   compile every kernel once (``vlref warmup``) and the march compiled ahead of a cold render
 """
 
 __version__ = "0.1.0"

@@ -47,7 +47,7 @@ from typing import Any, Callable, Iterator, Sequence
 
 from .errors import InputError
 
-__all__ = ["Item", "After", "ItemsFailed", "parse_scheduler", "add_scheduler_argument", "run_items",
+__all__ = ["Item", "After", "ItemsFailed", "parse_scheduler", "run_items",
            "local_cluster", "host_cores"]
 
 
@@ -71,12 +71,12 @@ class After:
 class ItemsFailed(Exception):
     """Items that failed on a cluster: ``failures`` is a list of ``(key, reason)``.
 
-    ``exit_code`` is 2 when every failure is bad input (:class:`InputError`), else 1.
+    ``bad_input``: every failure is bad input (:class:`InputError`; the CLI exits 2, else 1).
     """
 
     def __init__(self, failures: list[tuple[str, str]], bad_input: bool):
         self.failures = failures
-        self.exit_code = 2 if bad_input else 1
+        self.bad_input = bad_input
         super().__init__(f"{len(failures)} item(s) failed:\n" + "\n".join(f"  {k}: {r}" for k, r in failures))
 
 
@@ -102,14 +102,6 @@ def parse_scheduler(text: str | None):
         return ("address", text)
     raise InputError("<command line>", "--scheduler",
                      f"expected local, local:N or a scheduler address tcp://host:port, got {text!r}")
-
-
-def add_scheduler_argument(parser) -> None:
-    """The ``--scheduler`` option shared by ``golden``, ``reference`` and ``sweep``."""
-    parser.add_argument("--scheduler", metavar="local[:N]|tcp://HOST:PORT",
-                        help="run the independent items on Dask (pip install 'vlref[distributed]'): a "
-                             "LocalCluster of N worker processes (default: one per core), or an existing "
-                             "scheduler; default: in this process")
 
 
 def _numba_threads(threads_by_host: dict[str, int]) -> None:

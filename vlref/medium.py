@@ -101,7 +101,7 @@ def pack_medium(scene, dtype=np.float64) -> PackedMedium:
     return PackedMedium(p.astype(dtype), np.ascontiguousarray(lattice, dtype=dtype))
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def noise_value(lattice, px, py, pz):
     """Trilinear, periodic sample of ``lattice`` at ``p`` (lattice cells; values at cell centres)."""
     n = lattice.shape[0]
@@ -119,13 +119,13 @@ def noise_value(lattice, px, py, pz):
     return (c00 * (one - wy) + c10 * wy) * (one - wz) + (c01 * (one - wy) + c11 * wy) * wz
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def fog_exponent(mp, y):
     """The height-fog exponent ``min(-(y - base) · falloff, FOG_MAX_EXPONENT)`` (fog factor = its exp)."""
     return min(-(y - mp[M_FOG_BASE]) * mp[M_FOG_K], cast(y, FOG_MAX_EXPONENT))
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def in_bounds(mp, x, y, z):
     """The point lies in the medium's box (always, for an unbounded medium)."""
     if mp[M_BOUNDED] == cast(x, 0.0):
@@ -134,7 +134,7 @@ def in_bounds(mp, x, y, z):
                 or z > mp[M_BZ1])
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def fog_depth_ratio(delta):
     """``(1 - e^{-δ})/δ`` for ``δ = |e_a - e_b| >= 0`` (``1 - δ/2`` below 1e-6): the height-fog optical
     depth of a segment is ``σt · L · e^{max(e_a, e_b)}`` times this."""
@@ -143,7 +143,7 @@ def fog_depth_ratio(delta):
     return -math.expm1(-delta) / delta
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def density(mp, lattice, x, y, z):
     """Density factor ρ(x) ≥ 0 (module docstring)."""
     zero = cast(x, 0.0)
@@ -167,7 +167,7 @@ def sigma(mp, lattice, x, y, z):
     return mp[M_SS] * rho, mp[M_ST] * rho
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     """``[t0, t1]`` clipped to the medium box (slab test); empty when the result has ``a >= b``."""
     if mp[M_BOUNDED] == cast(ox, 0.0):
@@ -190,7 +190,7 @@ def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     return a, b
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
     """τ = ∫_{t0}^{t1} σt(o + t d) dt for a unit direction ``d`` (module docstring); 0 for ``t1 <= t0``."""
     zero = cast(ox, 0.0)

@@ -3,7 +3,8 @@
 ``estimate(scene)`` = frame buffers + shadow maps + process:
 
 * frame buffers: ``width * height * B_t`` bytes, ``B_t`` the peak bytes per pixel of technique ``t``
-  (G-buffer, ray directions, scene colour, the technique's pass buffers, the outputs, float64);
+  (G-buffer, ray directions, scene colour, the technique's pass buffers, the outputs, float64): its
+  registry entry's ``bytes_per_pixel`` (:data:`vlref.techniques.TECHNIQUES`);
 * shadow maps: every shadowed light's faces (spot 1, point 6, directional ``cascades``) of
   ``resolution^2`` texels at ``SHADOW_BYTES_PER_TEXEL[type]`` each (the float32 map and, while it is cast,
   the texels' ray origins, directions and distances in float64);
@@ -23,8 +24,6 @@ from .errors import InputError
 
 __all__ = ["MemoryEstimate", "estimate", "available_bytes", "check_memory"]
 
-BYTES_PER_PIXEL = {"physical": 240, "killzone": 360, "slightlymad": 300, "urp": 340, "radial": 300}
-"""Peak bytes per frame pixel of each technique (measured 228, 352, 294, 333, 292)."""
 SHADOW_BYTES_PER_TEXEL = {"spot": 128, "point": 75, "directional": 60}
 """Peak bytes per shadow-map texel by light type (measured 128, 74.7, 58.7 at 512^2)."""
 PROCESS_BYTES = 300e6
@@ -52,9 +51,10 @@ def _faces(light) -> int:
 
 def estimate(scene) -> MemoryEstimate:
     """The peak memory of ``render(scene)`` (module docstring), in bytes."""
+    from .techniques import TECHNIQUES
+
     r = scene.render
-    per_pixel = BYTES_PER_PIXEL.get(r.technique, max(BYTES_PER_PIXEL.values()))
-    frame = float(r.width) * r.height * per_pixel
+    frame = float(r.width) * r.height * TECHNIQUES[r.technique].bytes_per_pixel
     maps = [(i, float(_faces(l)) * l.shadows.resolution ** 2 * SHADOW_BYTES_PER_TEXEL[l.type])
             for i, l in enumerate(scene.lights) if l.shadows is not None and l.shadows.enabled]
     shadows = sum(b for _, b in maps)

@@ -54,6 +54,7 @@ import numpy as np
 from .errors import InputError
 from .io import srgb8, write_exr
 from .render import Frame, prepare_frame
+from .techniques import TECHNIQUES
 
 __all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice",
            "Toggle", "live_widgets", "interact_or_static", "Timing", "time_call", "PreviewRenderer", "examples_dir",
@@ -272,7 +273,7 @@ def time_call(fn: Callable[[], Any], repeat: int = 5, warmup: int = 1) -> tuple[
 def scaled_light_intensity(scene, factor: float):
     """``scene`` with every light's ``intensity`` multiplied by ``factor`` (>= 0)."""
     if not (factor >= 0.0 and math.isfinite(factor)):
-        raise InputError("<notebook>", "lights.intensity", f"scale factor must be finite and >= 0, got {factor!r}")
+        raise ValueError(f"scale factor must be finite and >= 0, got {factor!r}")
     return scene.replace(lights=tuple(dataclasses.replace(l, intensity=l.intensity * factor) for l in scene.lights))
 
 
@@ -323,8 +324,7 @@ class PreviewRenderer:
         and ``scene_colour`` of ``scene``, as :func:`vlref.render.render` with ``stages=True`` gives them
         (shadow maps excepted)."""
         frame = self.frame(scene)
-        technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
-        out = dict(technique.render(scene, frame))
+        out = dict(TECHNIQUES[scene.render.technique].render(scene, frame))
         out.setdefault("depth", frame.gbuffer.depth)
         out.setdefault("scene_colour", frame.scene_colour)
         return out
@@ -348,7 +348,8 @@ def examples_dir() -> Path:
     for c in candidates:
         if (c / EXAMPLE_FILES["reference"]).is_file():
             return c
-    raise InputError("<installation>", "", "bundled examples not found (set VLREF_EXAMPLES)")
+    raise InputError(str(candidates[-1]), "", "bundled examples not found (looked in "
+                     + ", ".join(str(c) for c in candidates) + "; set VLREF_EXAMPLES)")
 
 
 def make_port_example(out_dir, scene: str = "pillars", width: int = 160, height: int = 90,

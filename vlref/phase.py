@@ -1,7 +1,7 @@
 """Henyey-Greenstein phase function.
 
 ``p(cos θ; g) = (1 - g²) / (4π (1 + g² - 2 g cos θ)^{3/2})``  (Henyey & Greenstein 1941;
-DESIGN.md). ``cos θ = dot(d, l)`` with ``d`` the view-ray direction (camera -> scene) and ``l``
+docs/CONVENTIONS.md). ``cos θ = dot(d, l)`` with ``d`` the view-ray direction (camera -> scene) and ``l``
 the unit vector from the sample *toward* the light, so looking into the light with ``g > 0``
 is the forward peak. Mitsuba writes the same law with its direction vectors reversed
 (``wi`` points away from the scattering point); the port's ``cos θ`` is then ``-dot``.

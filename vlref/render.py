@@ -1,7 +1,9 @@
 """Render orchestration: scene -> camera -> geometry -> G-buffer -> lights -> technique -> buffers.
 
-``render(scene)`` is what the CLI, the notebooks, the reference and the oracle call. Each pass
-returns named float buffers; ``RenderResult.buffers`` gathers them under stable names:
+``render(scene)`` is what the CLI, the notebooks, the reference and the oracle call. The technique is
+the registry's entry :data:`vlref.techniques.TECHNIQUES` ``[render.technique]``; each pass returns named
+float buffers (the stage-buffer contract of :mod:`vlref.techniques`); ``RenderResult.buffers`` gathers
+them under stable names:
 
 =================  ============================================================
 ``final``          (H,W,3) the composited frame
@@ -23,7 +25,6 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
-import importlib
 import json
 import time
 from dataclasses import dataclass, field
@@ -36,20 +37,9 @@ from . import __version__
 from .camera import Camera, camera_from_settings
 from .scene.animation import scene_at
 from .scene.model import Scene
+from .techniques import FRAME_BUFFERS, TECHNIQUES
 
-__all__ = ["Frame", "RenderResult", "render", "prepare_frame", "resolved", "scene_hash", "scene_settings_json"]
-
-
-def resolved(scene: Scene, name: str):
-    """``render.steps``/``sampling``/``resolution``, or the technique's default when the scene leaves it unset."""
-    value = getattr(scene.render, name)
-    if value is not None:
-        return value
-    params = scene.techniques.of(scene.render.technique)
-    default = getattr(params, name, None)
-    if default is None:
-        return {"steps": 32, "sampling": "none", "resolution": "full"}[name]
-    return default
+__all__ = ["Frame", "RenderResult", "render", "prepare_frame", "scene_hash", "scene_settings_json"]
 
 
 def _portable(node: Any) -> Any:
@@ -86,7 +76,7 @@ class Frame:
 
     ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
     :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
-    (:func:`vlref.oracle.port_buffers.port_frame`).
+    (:func:`vlref.port.port_frame`).
     """
 
     scene: Scene
@@ -163,15 +153,15 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
 
     frame = prepare_frame(scene, tick)
     frame.history = history
-    technique = importlib.import_module(f"vlref.techniques.{scene.render.technique}")
+    technique = TECHNIQUES[scene.render.technique]
     out = technique.render(frame.scene, frame)
     next_history = out.pop("history", None)
     tick("volumetrics")
 
     g = frame.gbuffer
-    buffers = {"final": out["final"], "inscatter": out["inscatter"], "transmittance": out["transmittance"],
-               "scene_colour": frame.scene_colour, "depth": g.depth, "normal": g.normal, "albedo": g.albedo,
-               "object_id": g.object_id}
+    buffers = {name: out[name] for name in FRAME_BUFFERS}
+    buffers.update({"scene_colour": frame.scene_colour, "depth": g.depth, "normal": g.normal, "albedo": g.albedo,
+                    "object_id": g.object_id})
     if stages:
         buffers.update({k: v for k, v in out.items() if k not in buffers})
         if frame.shadow_cache:
@@ -179,5 +169,5 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
     metadata = {"vlref_version": __version__, "scene_hash": scene_hash(scene),
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}
-    notes = technique.notes(scene, out) if hasattr(technique, "notes") else []
+    notes = technique.notes(scene, out) if technique.notes is not None else []
     return RenderResult(buffers, metadata, timings, notes, next_history)

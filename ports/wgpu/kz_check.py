@@ -63,14 +63,14 @@ def margins(report) -> tuple[float, float]:
 def render_and_march(out_dir: Path, overrides=(), dev=None):
     """The faithful port rendered and exported to ``out_dir/port``, vlref marched into ``out_dir/marched``:
     ``(port, passes, marched_dir, seconds of vlref march)``."""
-    from vlref.oracle.port_buffers import main_march
+    from vlref.cli import main
 
     scene = kz_scene.load(str(SCENE), overrides)
     port = kz_port.KillzonePort(scene, dev)
     passes = port.run("faithful")
     manifest = kz_port.export(port, out_dir / "port", str(SCENE), overrides, passes)
     start = time.perf_counter()
-    if main_march([str(manifest), "-o", str(out_dir / "marched"), "--stages", "-q"]) != 0:
+    if main(["march", str(manifest), "-o", str(out_dir / "marched"), "--stages", "-q"]) != 0:
         raise RuntimeError("vlref march failed on the port's buffers")
     return port, passes, out_dir / "marched", time.perf_counter() - start
 

@@ -25,7 +25,6 @@ Usage: ``python ports/wgpu/kz_port.py SCENE -o DIR [--size 160x90] [--variant NA
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import re
 import sys
@@ -193,7 +192,7 @@ class KillzonePort:
 
     def render_scene(self):
         """Passes 1-3 (run by the constructor; again to time them warm)."""
-        wgpu, d, cam = self.wgpu, self.device, self.cam
+        wgpu, cam = self.wgpu, self.cam
         W, H = cam.width, cam.height
         tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)
         vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)

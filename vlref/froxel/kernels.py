@@ -109,7 +109,7 @@ def froxel_integrate(scatter, dirs, forward, bounds, out):
             out[r, c, k, 0], out[r, c, k, 1], out[r, c, k, 2], out[r, c, k, 3] = lr, lg, lb, trans
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _boundary(integrated, r, c, b, ch):
     """Channel ``ch`` of the integrated value at boundary ``b`` of column (r, c): boundary 0 = (0, 0, 0, 1)."""
     if b == 0:

@@ -70,7 +70,7 @@ def tile_depth(depth: np.ndarray, gw: int, gh: int) -> np.ndarray:
     return maximum_filter(out, size=3, mode="nearest")
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _fetch(grid, frames, gx, gy, gz, out):
     """Trilinear, clamp-to-edge fetch of the 4 channels into ``out`` (4,); returns the fetched frame count."""
     gh, gw, d = grid.shape[0], grid.shape[1], grid.shape[2]

@@ -114,6 +114,30 @@ def _sah_split(tmin, tmax, cent, idx, s, e, cmin, cmax):
 
 
 @njit(cache=True, fastmath=False)
+def _sort_by_key(idx, s, e, key):
+    """Stable in-place sort of ``idx[s:e]`` by ``key[idx]``: a bottom-up merge sort (ties keep their order,
+    so the result is ``np.argsort(kind="stable")``'s, which compiles several times slower in Numba)."""
+    a = idx[s:e].copy()
+    b = np.empty_like(a)
+    n = a.shape[0]
+    width = 1
+    while width < n:
+        for lo in range(0, n, 2 * width):
+            mid, hi = min(lo + width, n), min(lo + 2 * width, n)
+            i, j = lo, mid
+            for k in range(lo, hi):
+                if j >= hi or (i < mid and key[a[i]] <= key[a[j]]):
+                    b[k] = a[i]
+                    i += 1
+                else:
+                    b[k] = a[j]
+                    j += 1
+        a, b = b, a
+        width *= 2
+    idx[s:e] = a
+
+
+@njit(cache=True, fastmath=False)
 def _build(tmin, tmax, cent, max_leaf, pad):
     """Top-down build from per-triangle bounds and centroids (module docstring); returns the
     trimmed node arrays and the triangle order. Nodes are numbered in creation order, siblings adjacent."""
@@ -166,9 +190,7 @@ def _build(tmin, tmax, cent, max_leaf, pad):
                     j -= 1
             mid = i
         if mid == s or mid == e:
-            wide = np.argmax(chi - clo)
-            part = idx[s:e][np.argsort(cent[idx[s:e], wide], kind="mergesort")]
-            idx[s:e] = part
+            _sort_by_key(idx, s, e, cent[:, np.argmax(chi - clo)])
             mid = (s + e) // 2
         left = used
         used += 2
@@ -241,7 +263,7 @@ def _inverse(d):
     return 1.0 / (d if d != 0.0 else 1e-300)
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def descend(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best, stack, stack_t, top):
     """Closest-hit traversal step at an interior node whose children are ``left``, ``left + 1``: returns
     ``(node, top)`` — the nearer child hit by the ray (the farther one pushed with its entry distance),
@@ -259,7 +281,7 @@ def descend(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best, stack,
     return near, top + 1
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def pop_nearer(stack, stack_t, top, node, best):
     """``(node, top)``: ``node`` if set, else the next pushed node whose entry distance is ``<= best``
     (farther ones are skipped: they cannot hold a closer hit); ``-1`` when the stack runs out."""
@@ -270,7 +292,7 @@ def pop_nearer(stack, stack_t, top, node, best):
     return node, top
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def push_children(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top):
     """Any-hit traversal step: push the children ``left``, ``left + 1`` whose boxes the ray crosses in
     ``(tmin, tmax)``; returns the new stack top."""
@@ -281,7 +303,7 @@ def push_children(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, tmax, 
     return top
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax, stack, top):
     """Any-hit traversal: pop nodes (pushing the crossed children of interior ones) until a leaf;
     returns ``(leaf, top)``, or ``(-1, 0)`` when the stack runs out."""

@@ -7,7 +7,7 @@ Every law is 0 for ``d >= R``: the light volume (a ball of radius ``R``) ends th
                     source. The guard is Frostbite's 1 cm light size (Lagarde & de Rousiers 2014,
                     "Moving Frostbite to PBR", §4.1) and keeps a ray through the light finite.
 ``unity``           Unity built-in pipeline falloff ``LUT(u)`` (``_LightTextureB0`` sampled at
-                    ``(u, u)``, seed-algorithms §1.6). Unity's texture is not published: by default
+                    ``(u, u)``, SOURCES §1.6). Unity's texture is not published: by default
                     the community reconstruction ``1/(1 + 25u) · saturate(5(1 - sqrt(u)))`` (folk
                     formula ``1/(1+25u)`` faded to 0 at the range; *not Unity's exact texture*),
                     or a user LUT sampled bilinearly with clamp (:func:`unity_lut_lookup`).

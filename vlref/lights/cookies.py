@@ -11,7 +11,7 @@ Projection, in the light frame ``(x_l, y_l, z_l)`` = (right, up, forward) of
 * spot: ``u = 0.5 + 0.5 · x_l / (z_l · tan(spot_angle/2))``, ``v = 0.5 + 0.5 · y_l / (z_l · tan(spot_angle/2))``
   (``z_l > 0``): the picture fills the square circumscribing the cone's cross-section, its right edge
   along the light's right axis and its top along the light's up axis (Unity's spot-cookie matrix,
-  seed-algorithms §1.6).
+  SOURCES §1.6).
 * directional: ``u = 0.5 + x_l/size``, ``v = 0.5 + y_l/size`` with ``(x_l, y_l)`` measured from the
   light's ``position``: one tile of ``cookie.size`` metres centred on it; it tiles only with
   ``wrap = "repeat"``.

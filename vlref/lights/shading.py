@@ -1,6 +1,6 @@
 """What a light delivers at a point (unshadowed), and the scene colour of the G-buffer.
 
-:func:`light_incidence` evaluates ``E_l(x)`` of DESIGN.md without visibility or medium:
+:func:`light_incidence` evaluates ``E_l(x)`` of docs/PHYSICS.md "The integral" without visibility or medium:
 
 * point: ``colour·intensity · A(d)`` with ``A`` the light's distance law
   (:mod:`vlref.lights.attenuation`), 0 beyond ``range``;
@@ -39,7 +39,7 @@ __all__ = ["light_incidence", "scene_colour", "SURFACE_OFFSET"]
 SURFACE_OFFSET = 1e-4
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def light_incidence(lights, k, x, y, z):
     """``(lx, ly, lz, dist, er, eg, eb)`` of light ``k`` of ``lights`` (:class:`~vlref.lights.pack.PackedLights`)
     at ``(x, y, z)`` (module docstring).

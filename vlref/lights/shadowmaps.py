@@ -56,8 +56,8 @@ from ..geometry import closest_hit, shadow_transmittance
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
-__all__ = ["ShadowMaps", "ShadowTable", "build_shadow_maps", "apply_strength", "shadow_visibility", "cascade_splits",
-           "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+__all__ = ["ShadowMaps", "ShadowTable", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "apply_strength",
+           "shadow_visibility", "cascade_splits", "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
@@ -115,6 +115,16 @@ class ShadowMaps:
         ints[shadowed, S_MODE] = mode
         return ShadowMaps(ints, self.floats, self.data, self.tint, self.names)
 
+    def mode(self, light: int) -> int:
+        """The lookup mode of ``light`` (``SHADOW_NONE``, ``SHADOW_HARD``, ``SHADOW_PCF``, ``SHADOW_EXACT``)."""
+        return int(self.ints[light, S_MODE])
+
+    def cascade(self, light: int, k: int) -> tuple[np.ndarray, float, float]:
+        """``(centre (3,), radius, back)`` of cascade ``k`` of directional ``light``: its bounding sphere and
+        the distance from the map's near plane to the centre (metres)."""
+        c = self.floats[light, S_CASC + 5 * k:S_CASC + 5 * k + 5]
+        return c[:3], float(c[3]), float(c[4])
+
     @property
     def table(self) -> ShadowTable:
         """The arrays as the record the njit kernels take."""
@@ -132,6 +142,45 @@ class ShadowMaps:
                 out[name + "_transparent_distance"] = layer[:, :, 0]
                 out[name + "_transmittance"] = layer[:, :, 1:]
         return out
+
+
+@dataclass(frozen=True)
+class LightMaps:
+    """One light's maps given as texels rather than cast (a GPU port's, :mod:`vlref.port.shadows`).
+
+    ``tiles``: ``(buffer name, texels (res * res,) float32)`` in vlref's order (one spot map, the six cube
+    faces in ``CUBE_FACES`` order, or the cascades), each texel the biased distance of the module docstring;
+    ``cascades``: ``(centre (3,), radius, back)`` per cascade (directional lights only, else empty).
+    """
+
+    light: int
+    mode: int
+    strength: float
+    tiles: tuple
+    cascades: tuple = ()
+
+
+def pack_shadow_maps(count: int, maps) -> ShadowMaps:
+    """:class:`ShadowMaps` of ``count`` lights from :class:`LightMaps` (lights not listed: unshadowed);
+    no transparent layer."""
+    ints = np.zeros((count, NSI), dtype=np.int64)
+    floats = np.zeros((count, NSF))
+    chunks, names, offset = [], [], 0
+    for m in maps:
+        ints[m.light, S_MODE] = m.mode
+        floats[m.light, S_STRENGTH] = m.strength
+        for k, (name, texels) in enumerate(m.tiles):
+            if k == 0:
+                ints[m.light, S_RES], ints[m.light, S_OFFSET] = int(round(math.sqrt(texels.size))), offset
+            chunks.append(texels)
+            names.append((name, m.light, offset, texels.size))
+            offset += texels.size
+        for k, (centre, radius, back) in enumerate(m.cascades):
+            floats[m.light, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)
+        if m.cascades:
+            ints[m.light, S_CASCADES] = len(m.cascades)
+    data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
+    return ShadowMaps(ints, floats, data, np.zeros((0, 4), dtype=np.float32), names)
 
 
 def cascade_splits(near: float, far: float, count: int, split_lambda: float) -> np.ndarray:
@@ -254,7 +303,7 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     return ShadowMaps(ints, floats, data, tint, names)
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _tap(data, tint, base, tbase, res, col, row, d_ref):
     k = row * res + col
     lit = 1.0 if d_ref <= data[base + k] else 0.0
@@ -263,7 +312,7 @@ def _tap(data, tint, base, tbase, res, col, row, d_ref):
     return lit, lit, lit
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
     """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top). Without a transparent layer
     (``tbase < 0``) r = g = b and the PCF blend is evaluated once."""
@@ -292,7 +341,7 @@ def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
             w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def _cube_face(wx, wy, wz):
     ax, ay, az = abs(wx), abs(wy), abs(wz)
     if ax >= ay and ax >= az:
@@ -302,7 +351,7 @@ def _cube_face(wx, wy, wz):
     return 4 if wz >= 0 else 5
 
 
-@njit(cache=True, fastmath=False, inline="always")
+@njit(cache=True, fastmath=False, forceinline=True)
 def map_lit(shadows, kind, lf, light, x, y, z):
     """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64).
 

@@ -1,4 +1,4 @@
-"""The thesis / Killzone march (seed 000 §2.2.3, §2.2.4, §2.6, §4.2.2; research §4): one light.
+"""The thesis / Killzone march (thesis §2.2.3, §2.2.4, §2.6, §4.2.2; SOURCES §4): one light.
 
 Per march pixel the view ray ``x(t) = c + t d`` is cut to the light's volume (``[a, b]``, from
 :mod:`vlref.march.segments`), divided into ``N`` steps ``Δ = (b - a)/N`` and sampled at

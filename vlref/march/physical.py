@@ -1,4 +1,4 @@
-"""The physical single-scattering march (DESIGN.md "The physics"; Hillaire 2015 step integration).
+"""The physical single-scattering march (docs/PHYSICS.md "The integral"; Hillaire 2015 step integration).
 
 For each pixel (view ray ``x(t) = o + t d``, ``t ∈ [0, t_end]``, ``t_end = min(scene distance,
 render.max_distance)``) and each light ``l``:
@@ -6,9 +6,9 @@ render.max_distance)``) and each light ``l``:
 1. the segment ``[a, b]`` of the ray where the integrand can be non-zero: inside the light's volume
    (:mod:`vlref.march.segments`: ball of radius ``range``, cone ∩ ball, or the whole ray for a
    directional light), clipped to ``medium.bounds`` (:func:`vlref.medium.clip_to_bounds`) and to the
-   scene depth ``t_end`` (issue 12: a light of range 1000 m in an 8 m box otherwise spreads its steps
-   over 1000 m of empty space). The height fog and the noise are positive wherever the medium is, so
-   they clip nothing;
+   scene depth ``t_end`` (a light of range 1000 m in an 8 m box otherwise spreads its steps over 1000 m
+   of empty space: BENCHMARKS.md "Sample placement"). The height fog and the noise are positive wherever
+   the medium is, so they clip nothing;
 2. ``N`` steps of ``Δ = (b - a)/N`` with samples at ``t_i = a + (i + β) Δ`` (``β`` the pixel's offset);
 3. per step, with ``σs, σt`` at the sample (:mod:`vlref.medium`):
    ``S = σs · p(d·l) · V · T_l · E_l`` (``p`` HG with ``l`` toward the light, ``V`` shadow visibility,
@@ -37,7 +37,7 @@ march is float32 (constants through :func:`vlref.numeric.cast`, the HG value inc
 texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
 its own) and exact shadow rays (the geometry is float64).
 
-Evaluation (issue 8; the same integral, rearranged for speed): per segment ``e^{-σt Δ}`` is taken as
+Evaluation (the same integral, rearranged for speed): per segment ``e^{-σt Δ}`` is taken as
 ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs (one transcendental, not two) and
 reused while ``σt`` does not change (homogeneous or boxed media: once per segment). In a noiseless
 height fog the fog exponent is linear in the step index, so the factor is ``e^{e_0} q^i`` (one multiply

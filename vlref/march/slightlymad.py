@@ -1,6 +1,6 @@
 """SlightlyMad/VolumetricLights: dither texture, density, light term and the ``RayMarch`` loop.
 
-Everything here follows ``research/seed-algorithms.md`` §1 (VL = ``VolumetricLight.shader``,
+Everything here follows ``docs/SOURCES.md`` §1 (VL = ``VolumetricLight.shader``,
 ``VolumetricLight.cs``, ``VolumetricLightRenderer.cs`` at HEAD ``d20b6f9``).
 
 Dither (§1.5): the 8x8 texture holds byte ``floor(255 k / 65)`` with ``k`` the **transposed**
@@ -30,7 +30,6 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit, prange
 
-from ..errors import InputError
 from ..lights.attenuation import distance_attenuation
 from ..lights.cone import cone_falloff
 from ..lights.cookies import sample_texture, spot_cookie_uv
@@ -47,7 +46,7 @@ __all__ = ["dither_k", "dither_table", "dither_offsets", "spot_profile_cookie", 
 
 SPOT_PROFILE = ((0.0, 1.0), (0.5, 1.0), (0.6, 0.977), (0.7, 0.803), (0.8, 0.448), (0.85, 0.273), (0.9, 0.140),
                 (0.95, 0.057), (1.0, 0.013), (1.1, 0.0))
-"""(r, alpha) of VL's ``spot.png``, r in half-widths from the centre (research Appendix A, measured)."""
+"""(r, alpha) of VL's ``spot.png``, r in half-widths from the centre (SOURCES Appendix A, measured)."""
 
 CONE_COOKIE_ONLY = -1
 """``cone_law`` value selecting VL's spot falloff: the cookie alone (§1.6)."""
@@ -90,7 +89,7 @@ def dither_k(size: int) -> np.ndarray:
         return bayer_matrix(8).T + 1
     if size == 4:
         return bayer_matrix(4)
-    raise InputError("<arguments>", "dither", f"VL's dither texture is 8x8 or 4x4, got {size}")
+    raise ValueError(f"VL's dither texture is 8x8 or 4x4, got {size}")
 
 
 def dither_table(size: int = 8) -> np.ndarray:

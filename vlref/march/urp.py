@@ -1,4 +1,4 @@
-"""The URP tutorial's march (Valerio Marty, seed 002; research §2.3): one directional light.
+"""The URP tutorial's march (Valerio Marty; SOURCES §2.3): one directional light.
 
 Per low-res pixel with Blit uv ``(u, v)`` (``v`` up from the bottom, Unity) and view ray ``d`` to
 the reconstructed world position ``P`` (at the far plane on sky):

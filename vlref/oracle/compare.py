@@ -11,30 +11,26 @@ comparing depth buffers), a border of ``border`` pixels on every edge, and a use
 (nonzero in any channel = compared). Non-finite values are only allowed outside the compared pixels;
 NaN never.
 
-Exit codes of :func:`main_compare`: 0 pass, 1 fail, 2 bad input (:class:`vlref.errors.InputError`).
+The command line (exit 0 pass, 1 fail, 2 bad input) is :mod:`vlref.cli.compare`.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
-import sys
 from dataclasses import dataclass, field
-from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 
 from .. import __version__
 from ..errors import InputError
 from ..io import read_image
-from .metrics import FLIP_MISSING, FlipResult, error_metrics, failing_pixels, hdr_flip
+from .metrics import FlipResult, error_metrics, failing_pixels, hdr_flip
 from .presets import Tolerance, tolerance
 
 __all__ = [
-    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files", "add_arguments", "run_compare",
-    "main_compare",
+    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files",
 ]
 
 RULE = ("pixel fails when |test-ref| > abs_tol*S + rel_tol*|ref| in any channel; image passes when "
@@ -69,10 +65,6 @@ class Report:
     test: np.ndarray = field(repr=False)
     mask: np.ndarray = field(repr=False)
     fail: np.ndarray = field(repr=False)
-
-    @property
-    def exit_code(self) -> int:
-        return 0 if self.passed else 1
 
     def to_dict(self) -> dict:
         """All numbers, the rule, the verdict, the preset and the inputs (JSON-ready after
@@ -123,7 +115,8 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
 
     ``mask`` (``(H, W)`` bool, true = compared) defaults to every pixel. ``names`` label the arrays in
     error messages. Raises :class:`InputError` when shapes or channel counts differ, a value is NaN,
-    a compared value is infinite, or the mask selects no pixel.
+    a compared value is infinite, or the mask selects no pixel; :class:`ValueError` when ``mask`` is not
+    ``(H, W)``.
     """
     tol = tolerance(tol) if isinstance(tol, str) else tol
     r, t = _as_image(ref), _as_image(test)
@@ -137,7 +130,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
         raise InputError(names[1], "channels", f"{t.shape[2]} channel(s), the reference has {r.shape[2]}")
     mask = np.ones(r.shape[:2], bool) if mask is None else np.asarray(mask, dtype=bool)
     if mask.shape != r.shape[:2]:
-        raise InputError("<mask>", "shape", f"mask shape {mask.shape} differs from the images' {r.shape[:2]}")
+        raise ValueError(f"mask shape {mask.shape} differs from the images' {r.shape[:2]}")
     for a, name in ((r, names[0]), (t, names[1])):
         if np.isnan(a).any():
             raise InputError(name, "values", f"NaN present ({_first_bad(np.isnan(a).any(axis=2))})")
@@ -147,7 +140,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
                                              "mask them (e.g. ignore sky)")
     n = int(np.count_nonzero(mask))
     if n == 0:
-        raise InputError("<mask>", "", "the masks leave no pixel to compare")
+        raise InputError(names[0], "mask", "the masks leave no pixel to compare")
 
     s = 1.0 if tol.scale == "absolute" else float(np.mean(np.abs(r[mask])))
     abs_thr, mean_bound = tol.abs_tol * s, tol.max_mean_abs * s
@@ -193,7 +186,7 @@ def build_mask(ref: np.ndarray, *, ignore_sky: str | None = None, sky_depth: flo
                                                   f"the reference {w}x{h}")
         keep &= np.isfinite(depth) & (depth < sky_depth)
     if not (isinstance(border, (int, np.integer)) and border >= 0):
-        raise InputError("<command line>", "border", f"must be an integer >= 0, got {border!r}")
+        raise ValueError(f"border must be an integer >= 0, got {border!r}")
     if border:
         edge = np.zeros((h, w), bool)
         edge[border:h - border, border:w - border] = True
@@ -226,73 +219,3 @@ def compare_files(ref_path, test_path, preset: str = "float32", overrides: Mappi
     if out_dir is not None:
         write_outputs(report, out_dir, exposure=exposure)
     return report
-
-
-def _parse_set(items: Sequence[str] | None) -> dict[str, str]:
-    out = {}
-    for item in items or ():
-        k, sep, v = item.partition("=")
-        if not sep or not k.strip():
-            raise InputError("<command line>", "--set", f"expected KEY=VALUE, got {item!r}")
-        out[k.strip()] = v.strip()
-    return out
-
-
-def add_arguments(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """The options of ``vlref compare`` (for a sub-parser or a stand-alone parser)."""
-    p.add_argument("ref", help="reference image (.exr, .png, .npy, .npz)")
-    p.add_argument("test", help="test image, same size and channel count")
-    p.add_argument("--preset", default="float32",
-                   help="tolerance preset: exact, float32, gpu-full, gpu-half, gpu-quarter (default float32)")
-    p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                   help="override a tolerance knob: abs_tol, rel_tol, max_fail_fraction, max_mean_abs, "
-                        "max_flip_mean (none = off), scale (absolute|mean) (repeatable; default: the preset's)")
-    p.add_argument("--ignore-sky", metavar="DEPTH|ref",
-                   help="skip sky pixels: a depth image (inf or >= --sky-depth = sky) or 'ref' (non-finite "
-                        "reference) (default: compare sky too)")
-    p.add_argument("--sky-depth", type=float, default=math.inf,
-                   help="depth at and beyond which a pixel is sky (default: inf, only infinite depth)")
-    p.add_argument("--border", type=int, default=0, help="ignore this many pixels along every edge (default: 0)")
-    p.add_argument("--mask", help="mask image: compare where nonzero (default: every pixel)")
-    p.add_argument("--key", help="array name inside .npz inputs (default: the file's only array)")
-    p.add_argument("-o", "--output", help="write report.json, diff.exr, heatmap.png, report.html and, when HDR-FLIP "
-                   "runs (flip-evaluator installed, no --no-flip), flip.png here (default: write nothing)")
-    p.add_argument("--exposure", type=float, help="preview exposure in the HTML page (default: automatic, "
-                   "1/99th percentile of the reference)")
-    p.add_argument("--no-flip", action="store_true", help="skip HDR-FLIP (default: computed when flip-evaluator "
-                   "is installed)")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing, use the exit code (default: off)")
-    return p
-
-
-def run_compare(args: argparse.Namespace) -> int:
-    """Run a comparison from arguments parsed with :func:`add_arguments`; returns the exit code."""
-    from ..io import check_output_dir
-    try:
-        if args.output:
-            check_output_dir(args.output)
-        report = compare_files(args.ref, args.test, args.preset, _parse_set(args.set),
-                               ignore_sky=args.ignore_sky, sky_depth=args.sky_depth, border=args.border,
-                               mask=args.mask, key=args.key, out_dir=args.output, exposure=args.exposure,
-                               flip=not args.no_flip)
-    except InputError as exc:
-        print(f"vlref compare: error: {exc}", file=sys.stderr)
-        return 2
-    if not args.quiet and report.flip.note == FLIP_MISSING:
-        print(f"vlref compare: note: HDR-FLIP skipped, {FLIP_MISSING}; no flip.png written", file=sys.stderr)
-    if not args.quiet:
-        print(report.summary())
-        if args.output:
-            print(f"wrote {Path(args.output) / 'report.html'}")
-    return report.exit_code
-
-
-def main_compare(argv: Sequence[str] | None = None) -> int:
-    """``vlref compare`` with ``argv`` (default ``sys.argv[1:]``): 0 pass, 1 fail, 2 bad input (or usage)."""
-    parser = add_arguments(argparse.ArgumentParser(
-        prog="vlref compare", description="Compare a test image with a reference: exit 0 pass, 1 fail, 2 bad input."))
-    try:
-        args = parser.parse_args(list(sys.argv[1:] if argv is None else argv))
-    except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help
-        return int(exc.code or 0)
-    return run_compare(args)

@@ -13,15 +13,13 @@
 or a hand edit), a file is missing, the suite settings or the scene (``scene_hash``) changed since the
 build (stale goldens: rebuild deliberately), or a re-render differs from a golden beyond the manifest's
 tolerance preset (``float32``: last-ulp differences of exp/pow between machines pass, code changes
-fail). Exit 2: bad input (unreadable manifest, unknown option).
+fail). Exit 2: bad input (unreadable manifest, unknown option). The command line is :mod:`vlref.cli.golden`.
 
-Applicability (which techniques render which scene):
-
-* ``physical``, ``killzone``, ``slightlymad``, ``froxel``: every scene (they light any light type);
-* ``urp``: scenes with a directional light (the URP tutorial marches the main light only);
-* ``radial``: scenes whose radial light (:func:`vlref.techniques.radial.radial_light`) projects inside
-  the frame, in front of the camera: a screen-space radial blur centred off screen (or behind the
-  camera, where the technique fades to nothing) tests only its edge clamping.
+Applicability (which techniques render which scene) is each technique's ``applies`` rule in the
+registry (:data:`vlref.techniques.TECHNIQUES`): ``physical``, ``killzone``, ``slightlymad``, ``froxel``
+every scene; ``urp`` scenes with a directional light (:func:`vlref.techniques.urp.has_main_light`);
+``radial`` scenes whose radial light projects inside the frame (:func:`vlref.techniques.radial.light_in_frame`).
+The suite's ``techniques`` default to every registered technique.
 
 Animated scenes (an ``[animation]`` table) are rendered only by the suite's ``animation_techniques``,
 one entry per frame of ``animation_frames``, named ``scene@F/technique`` and stored under
@@ -30,14 +28,12 @@ one entry per frame of ``animation_frames``, named ``scene@F/technique`` and sto
 
 from __future__ import annotations
 
-import argparse
 import fnmatch
 import hashlib
 import json
 import os
 import shutil
 import sys
-import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -45,12 +41,11 @@ from typing import Sequence
 import numpy as np
 
 from .. import __version__
-from ..cluster import ItemsFailed, add_scheduler_argument
 from ..errors import InputError
 
-__all__ = ["Entry", "GoldenSuite", "load_suite", "applies", "suite_entries", "render_entry", "build", "verify",
-           "main_golden", "SUITE_FILE", "MANIFEST", "find_golden_dir", "golden_dir_candidates",
-           "golden_parser"]
+__all__ = ["Entry", "GoldenSuite", "load_suite", "suite_entries", "select_entries", "render_entry",
+           "build", "build_dir", "verify", "Outcome", "SUITE_FILE", "MANIFEST", "find_golden_dir",
+           "golden_dir_candidates"]
 
 SUITE_FILE = Path(__file__).resolve().parents[1] / "data" / "golden_suite.toml"
 CHECKOUT_GOLDEN = Path(__file__).resolve().parents[2] / "data" / "golden"
@@ -74,7 +69,7 @@ def find_golden_dir() -> Path:
     for c in candidates:
         if (c / MANIFEST).is_file():
             return c
-    raise InputError("<installation>", "", "no golden suite found (looked for manifest.json in "
+    raise InputError("<command line>", "--dir", "no golden suite found (looked for manifest.json in "
                      + ", ".join(str(c) for c in candidates) + "); point --dir at a golden folder or set VLREF_GOLDEN")
 
 
@@ -131,7 +126,7 @@ class Entry:
 
 def load_suite(path=SUITE_FILE) -> GoldenSuite:
     """Read and check a suite file; :class:`InputError` names the bad key."""
-    from ..scene.model import TECHNIQUES
+    from ..techniques import TECHNIQUES
     from ..tomlfile import read_toml
 
     path = Path(path)
@@ -171,24 +166,6 @@ def load_suite(path=SUITE_FILE) -> GoldenSuite:
                        animation_frames=tuple(frames), animation_techniques=tuple(anim_techniques), **ints)
 
 
-def applies(scene, technique: str) -> bool:
-    """Whether ``technique`` belongs in the suite for ``scene`` (module docstring)."""
-    if technique == "urp":
-        return any(light.type == "directional" for light in scene.lights)
-    if technique == "radial":
-        from ..camera import camera_from_settings
-        from ..post.radial import light_screen_uv
-        from ..techniques.radial import radial_light
-
-        light = scene.lights[radial_light(scene)]
-        cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
-        target = (np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0]) if light.type == "directional"
-                  else np.array([*light.position, 1.0]))
-        (u, v), visible = light_screen_uv(cam.view_projection() @ target)
-        return visible > 0.0 and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
-    return True
-
-
 def _overrides(suite: GoldenSuite, scene, technique: str) -> tuple[str, ...]:
     out = [f"render.width={suite.width}", f"render.height={suite.height}", f"render.steps={suite.steps}",
            f'render.technique="{technique}"']
@@ -203,6 +180,7 @@ def suite_entries(suite: GoldenSuite) -> list[Entry]:
     """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order; an
     animated scene gets one entry per frame of ``animation_frames`` (``render.frame=F`` appended)."""
     from ..scene import bundled_scenes, load_scene
+    from ..techniques import TECHNIQUES
 
     entries = []
     for name, path in bundled_scenes().items():
@@ -210,7 +188,7 @@ def suite_entries(suite: GoldenSuite) -> list[Entry]:
         animated = base.animation is not None
         frames = suite.animation_frames if animated else (None,)
         for technique in suite.techniques:
-            if applies(base, technique) and (not animated or technique in suite.animation_techniques):
+            if TECHNIQUES[technique].applies(base) and (not animated or technique in suite.animation_techniques):
                 over = _overrides(suite, base, technique)
                 entries += [Entry(name, technique, over) if f is None else
                             Entry(name, technique, over + (f"render.frame={f}",), f) for f in frames]
@@ -241,7 +219,8 @@ def _sha256(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _select(entries: list[Entry], only: Sequence[str] | None) -> list[Entry]:
+def select_entries(entries: list[Entry], only: Sequence[str] | None) -> list[Entry]:
+    """The entries whose name matches one of the ``only`` globs (all of them when ``only`` is empty)."""
     if not only:
         return entries
     return [e for e in entries if any(fnmatch.fnmatchcase(e.name, pattern) for pattern in only)]
@@ -283,7 +262,7 @@ def build(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = N
     suite = load_suite(suite_path)
     golden_dir = Path(golden_dir) if golden_dir is not None else build_dir()
     entries = suite_entries(suite)
-    selected = _select(entries, only)
+    selected = select_entries(entries, only)
     old = {}
     if only and (golden_dir / MANIFEST).exists():
         old = {e["name"]: e for e in read_manifest(golden_dir)["entries"]}
@@ -381,7 +360,7 @@ def verify(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = 
     if manifest.get("suite") != suite.as_dict():
         outcomes.append(Outcome("<suite>", [f"suite settings changed since the build: manifest "
                                             f"{manifest.get('suite')} vs {suite_path} {suite.as_dict()}"], {}))
-    expected = {e.name: e for e in _select(suite_entries(suite), only)}
+    expected = {e.name: e for e in select_entries(suite_entries(suite), only)}
     recorded = {e["name"]: e for e in manifest["entries"]}
     for name in sorted(expected.keys() - recorded.keys()):
         outcomes.append(Outcome(name, ["in the suite but not in the manifest (rebuild)"], {}))
@@ -430,56 +409,3 @@ def verify(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = 
             items.append(Item(name, render_entry, (entry, list(record["files"]))))
     run_items(items, scheduler, compare, desc="golden verify", quiet=quiet)
     return outcomes + [checked[name] for name in sorted(checked)]
-
-
-def golden_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="vlref golden", description="Build or verify the golden suite "
-                                "(verify: exit 0 pass, 1 fail, 2 bad input).")
-    p.add_argument("action", choices=("build", "verify", "list"),
-                   help="build: render and store the goldens; verify: re-render and compare; list: the entries")
-    p.add_argument("--dir", help="golden folder (default: $VLREF_GOLDEN, else the checkout's data/golden, else the "
-                   "installed <prefix>/share/vlref/golden)")
-    p.add_argument("--suite", default=str(SUITE_FILE), help="suite file (default: vlref/data/golden_suite.toml)")
-    p.add_argument("--only", action="append", metavar="GLOB",
-                   help="entries whose name (scene/technique) matches, e.g. 'pillars/*' (repeatable; default: all)")
-    p.add_argument("--preset", help="verify: tolerance preset instead of the manifest's (default: the manifest's)")
-    p.add_argument("-q", "--quiet", action="store_true", help="print only the summary (default: off)")
-    add_scheduler_argument(p)
-    return p
-
-
-def main_golden(argv: Sequence[str]) -> int:
-    """``vlref golden build|verify|list``: 0 success / pass, 1 verify failed, 2 bad input."""
-    try:
-        args = golden_parser().parse_args(list(argv))
-    except SystemExit as exc:
-        return int(exc.code or 0)
-    log = (lambda *a, **k: None) if args.quiet else print
-    start = time.perf_counter()
-    try:
-        if args.action == "list":
-            for e in _select(suite_entries(load_suite(args.suite)), args.only):
-                print(f"{e.name:32s} {' '.join(e.overrides)}")
-            return 0
-        if args.action == "build":
-            from ..io import check_output_dir
-
-            args.dir = args.dir or str(build_dir())
-            check_output_dir(args.dir, "--dir")
-            manifest = build(args.dir, args.suite, args.only, log, args.scheduler, args.quiet)
-            size = sum(p.stat().st_size for p in Path(args.dir).rglob("*") if p.is_file())
-            print(f"golden build: {len(manifest['entries'])} entries, {size / 1e6:.2f} MB in {args.dir} "
-                  f"({time.perf_counter() - start:.1f} s)")
-            return 0
-        outcomes = verify(args.dir or find_golden_dir(), args.suite, args.only, args.preset, log, args.scheduler,
-                          args.quiet)
-    except InputError as exc:
-        print(f"vlref golden: error: {exc}", file=sys.stderr)
-        return 2
-    except ItemsFailed as exc:
-        print(f"vlref golden: {exc}", file=sys.stderr)
-        return exc.exit_code
-    failed = [o for o in outcomes if o.problems]
-    print(f"golden verify: {len(outcomes) - len(failed)} of {len(outcomes)} passed "
-          f"({time.perf_counter() - start:.1f} s)" + (f"; FAILED: {', '.join(o.name for o in failed)}" if failed else ""))
-    return 1 if failed else 0

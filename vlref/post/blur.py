@@ -7,7 +7,7 @@ result (:func:`blur_hv`). ``values`` is ``(H, W)`` or ``(H, W, C)``; every pass 
     out = sum_k G_k W_k v_k / sum_k G_k W_k,
 
 accumulated in the source's tap order (listed per pass) in float64. Taps beyond the image use
-clamp addressing (the sources' RT wrap modes are [U], research §1.9/§7).
+clamp addressing (the sources' RT wrap modes are [U], SOURCES §1.9/§7).
 
 Depth weight ``W_k`` of a tap with depth difference ``dz = |z_k - z_0|`` (:func:`depth_delta`, with
 ``inf - inf = 0`` so sky matches sky): ``"gaussian"`` ``exp(-(dz * c) * (dz * c))`` (VL, URP) or
@@ -25,15 +25,14 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice, check_positive, nearest_index, point_texel, uv_row_map
+from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
 """``FULL/HALF/QUARTER_RES_BLUR_KERNEL_SIZE`` of VL's ``BilateralBlur.shader``."""
 
 URP_GAUSS_WEIGHTS = (0.14446445, 0.13543542, 0.11153505, 0.08055309, 0.05087564, 0.02798160, 0.01332457,
                      0.00545096)
-"""``gauss_filter_weights[0..7]`` of the URP tutorial (research §2.5)."""
+"""``gauss_filter_weights[0..7]`` of the URP tutorial (SOURCES §2.5)."""
 
 DEPTH_WEIGHTS = ("gaussian", "inverse")
 
@@ -134,7 +133,7 @@ def _run_blur(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor=1.0, ep
 def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
     """``G(i) = exp(-i^2 / (2 sigma^2)) / sqrt(2 pi sigma^2)``, ``i = 0..radius`` (VL ``GaussianWeight``)."""
     if radius < 0 or not sigma > 0:
-        raise InputError(ARGUMENTS, "blur", f"need radius >= 0 and sigma > 0, got {radius}, {sigma}")
+        raise ValueError(f"blur: need radius >= 0 and sigma > 0, got {radius}, {sigma}")
     i = np.arange(radius + 1, dtype=np.float64)
     return (1.0 / math.sqrt(2.0 * math.pi * sigma * sigma)) * np.exp(-(i * i) / (2.0 * sigma * sigma))
 
@@ -142,14 +141,14 @@ def gaussian_weights(radius: int, sigma: float) -> np.ndarray:
 def _values(values) -> np.ndarray:
     v = np.asarray(values, dtype=np.float64)
     if v.ndim not in (2, 3):
-        raise InputError(ARGUMENTS, "values", f"expected (H, W) or (H, W, C), got shape {v.shape}")
+        raise ValueError(f"values: expected (H, W) or (H, W, C), got shape {v.shape}")
     return v
 
 
 def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, depth_weight_kind: str = "gaussian",
                    epsilon: float = 1e-3, keep_alpha: bool = False) -> np.ndarray:
     """One pass with taps at integer texel offsets ``k = -K..K`` (``K = len(gauss) - 1``), value and
-    depth read at the same texel of the same resolution (thesis §4.2.6; VL §1.9).
+    depth read at the same texel of the same resolution (thesis §4.2.6; SOURCES §1.9).
 
     Tap order (VL ``BilateralBlur``): the centre, then ``k = -K..-1``, then ``k = 1..K``; tap ``k``
     weighs ``gauss[|k|] * W(dz_k)``, the centre ``gauss[0] * W(0)`` (1 for ``"gaussian"``). ``keep_alpha``: the last
@@ -159,9 +158,9 @@ def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, d
     v = _values(values)
     z = np.asarray(depth, dtype=np.float64)
     if z.shape != v.shape[:2]:
-        raise InputError(ARGUMENTS, "depth", f"depth shape {z.shape} does not match values {v.shape[:2]}")
+        raise ValueError(f"depth: depth shape {z.shape} does not match values {v.shape[:2]}")
     if keep_alpha and v.ndim != 3:
-        raise InputError(ARGUMENTS, "values", "keep_alpha needs an (H, W, C) buffer")
+        raise ValueError("values: keep_alpha needs an (H, W, C) buffer")
     code = _weight_code(depth_weight_kind, depth_factor, epsilon)
     g = np.asarray(gauss, dtype=np.float64)
     radius = len(g) - 1
@@ -190,7 +189,7 @@ def thesis_blur_pass(values, depth, axis: int, radius: int = 3, sigma: float = 1
 
 def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: float = 1.5,
                  depth_factor: float = 0.5, kernel_radius: int | None = None) -> np.ndarray:
-    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (research §1.9).
+    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (SOURCES §1.9).
 
     Radius ``K`` = 7 / 5 / 6 for full / half / quarter (``kernel_radius`` overrides it), Gaussian
     ``sigma = K / deviation`` (``GAUSS_BLUR_DEVIATION 1.5``), depth weight
@@ -200,7 +199,7 @@ def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: 
     check_choice("resolution", resolution, tuple(VL_KERNEL_RADIUS))
     v = _values(values)
     if v.ndim != 3 or v.shape[2] != 4:
-        raise InputError(ARGUMENTS, "values", f"VL blurs an (H, W, 4) RGBA buffer, got shape {v.shape}")
+        raise ValueError(f"values: VL blurs an (H, W, 4) RGBA buffer, got shape {v.shape}")
     k = VL_KERNEL_RADIUS[resolution] if kernel_radius is None else kernel_radius
     return bilateral_pass(v, depth, axis, gaussian_weights(k, k / deviation), depth_factor, keep_alpha=True)
 
@@ -208,7 +207,7 @@ def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: 
 def _urp_gauss(taps: int, weights) -> np.ndarray:
     g = np.asarray(weights, dtype=np.float64)
     if not 0 <= taps <= len(g) - 1:
-        raise InputError(ARGUMENTS, "samples", f"taps each side must be in 0..{len(g) - 1}, got {taps}")
+        raise ValueError(f"samples: taps each side must be in 0..{len(g) - 1}, got {taps}")
     return g
 
 
@@ -217,7 +216,7 @@ def _urp_axes(fog, depth_full, axis: int):
     f = _values(fog)
     z = np.asarray(depth_full, dtype=np.float64)
     if z.ndim != 2 or z.shape[0] < f.shape[0] or z.shape[1] < f.shape[1]:
-        raise InputError(ARGUMENTS, "depth", f"full-res depth {z.shape} cannot feed low-res fog {f.shape[:2]}")
+        raise ValueError(f"depth: full-res depth {z.shape} cannot feed low-res fog {f.shape[:2]}")
     return f, z
 
 
@@ -242,7 +241,7 @@ def _urp_pass(f, z, axis, taps_lo, taps_hi, centre_hi, g, falloff, uv_origin):
 
 def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: float, falloff: float = 100.0,
                           weights=URP_GAUSS_WEIGHTS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP article's pass (P1, research §2.5) on the low-res fog ``(h, w)``.
+    """The URP article's pass (P1, SOURCES §2.5) on the low-res fog ``(h, w)``.
 
     Tap ``k = -samples..samples`` sits at uv ``u_k = u + (k * amount) / 1000`` along the axis --
     **uv units**, so the blur width depends on resolution and aspect. The fog is point-sampled at
@@ -265,7 +264,7 @@ def urp_article_blur_pass(fog, depth_full, axis: int, samples: int, amount: floa
 
 def urp_repo_blur_pass(fog, depth_full, axis: int, taps: int = 5, falloff: float = 100.0,
                        weights=URP_GAUSS_WEIGHTS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP repository's pass (R, research §2.5): fixed ``n = 5``, integer texel offsets.
+    """The URP repository's pass (R, SOURCES §2.5): fixed ``n = 5``, integer texel offsets.
 
     The fog tap ``k`` is low-res texel ``j + k``; its depth is the raw full-res depth at the
     *full-res* texel ``c(j) + k``, ``c(j)`` the texel under the low-res centre -- the source's offset

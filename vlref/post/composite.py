@@ -2,7 +2,7 @@
 
 Colours are linear HDR, ``(H, W, 3)`` (or ``(H, W, 4)`` where stated); per-pixel scalars ``(H, W)``.
 
-Storage rounding (research §6.9) -- apply after the pass that writes the buffer:
+Storage rounding (SOURCES §6.9) -- apply after the pass that writes the buffer:
 
 * :func:`fp16` -- an ARGBHalf target (VL's light buffers): each value is first rounded to fp32 (the
   shader's ALU result), then to IEEE half with round-to-nearest-even. Values beyond the half range
@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice
+from vlref.post.resolution import check_choice
 
 FP16_MAX = 65504.0
 
@@ -31,7 +30,7 @@ def _per_pixel(a, like: np.ndarray) -> np.ndarray:
     """An (H, W) factor broadcast over the channel axis of ``like``."""
     a = np.asarray(a, dtype=np.float64)
     if a.shape != like.shape[:2]:
-        raise InputError(ARGUMENTS, "factor", f"per-pixel factor {a.shape} does not match image {like.shape[:2]}")
+        raise ValueError(f"factor: per-pixel factor {a.shape} does not match image {like.shape[:2]}")
     return a[..., None]
 
 
@@ -42,7 +41,7 @@ def composite_physical(scene, transmittance, inscatter) -> np.ndarray:
 
 
 def composite_vl(scene, volume) -> np.ndarray:
-    """VolumetricLights' ``BlitAdd`` (research §1.11): ``rgb = scene_rgb * V_a + V_rgb``, ``a = scene_a * V_a``.
+    """VolumetricLights' ``BlitAdd`` (SOURCES §1.11): ``rgb = scene_rgb * V_a + V_rgb``, ``a = scene_a * V_a``.
 
     ``volume`` is the full-res RGBA light buffer ``(H, W, 4)``; its alpha is the transmittance of
     the last directional light drawn (1 without one). ``scene`` is ``(H, W, 3)`` or ``(H, W, 4)``;
@@ -51,7 +50,7 @@ def composite_vl(scene, volume) -> np.ndarray:
     scene = np.asarray(scene, dtype=np.float64)
     volume = np.asarray(volume, dtype=np.float64)
     if volume.ndim != 3 or volume.shape[2] != 4 or scene.ndim != 3 or scene.shape[2] not in (3, 4):
-        raise InputError(ARGUMENTS, "volume", f"need scene (H, W, 3|4) and volume (H, W, 4), got "
+        raise ValueError(f"volume: need scene (H, W, 3|4) and volume (H, W, 4), got "
                                               f"{scene.shape} and {volume.shape}")
     va = volume[..., 3:4]
     out = scene.copy()
@@ -62,7 +61,7 @@ def composite_vl(scene, volume) -> np.ndarray:
 
 
 def composite_urp(scene, fog, intensity: float = 1.0, colour=(1.0, 1.0, 1.0)) -> np.ndarray:
-    """The URP tutorial's composite (research §2.7): ``scene + (F * intensity) * colour``.
+    """The URP tutorial's composite (SOURCES §2.7): ``scene + (F * intensity) * colour``.
 
     ``fog`` is the upsampled scalar fog ``F`` (H, W); ``colour`` is ``_SunMoonColor`` = the light's
     colour *without* its intensity; no extinction is applied to the scene.

@@ -5,9 +5,9 @@
   value using a min function ... the closest surface in all these pixels"). The block is
   :func:`~vlref.post.resolution.block_ranges` (the ``f x f`` block when the size divides).
   ``inf`` (sky) is an ordinary value here.
-* :func:`downsample_chessboard`: VolumetricLights' ``DOWNSAMPLE_DEPTH_MODE 2`` (research §1.8) on
+* :func:`downsample_chessboard`: VolumetricLights' ``DOWNSAMPLE_DEPTH_MODE 2`` (SOURCES §1.8) on
   **raw device depth**, one halving step; :func:`downsample_vl` chains it (quarter = twice half).
-* :func:`downsample_point`: the URP tutorial's pass 4 (research §2.6), a point sample of the raw
+* :func:`downsample_point`: the URP tutorial's pass 4 (SOURCES §2.6), a point sample of the raw
   full-res depth at the low-res texel centre.
 
 The raw-depth rules operate on the array exactly as given: ``min`` of raw depth is the nearest
@@ -19,8 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from vlref.errors import InputError
-from vlref.post.resolution import (ARGUMENTS, block_ranges, check_choice, gather_footprint, low_res_size,
+from vlref.post.resolution import (block_ranges, check_choice, gather_footprint, low_res_size,
                                    nearest_index, resolution_factor, uv_rows)
 
 
@@ -35,7 +34,7 @@ def _block_reduce(a: np.ndarray, n_lo: int, axis: int, ufunc) -> np.ndarray:
 def _check_depth(depth) -> np.ndarray:
     depth = np.asarray(depth)
     if depth.ndim != 2:
-        raise InputError(ARGUMENTS, "depth", f"expected an (H, W) depth buffer, got shape {depth.shape}")
+        raise ValueError(f"depth: expected an (H, W) depth buffer, got shape {depth.shape}")
     return depth
 
 
@@ -81,7 +80,7 @@ def downsample_chessboard(raw, uv_origin: str = "bottom") -> np.ndarray:
 def downsample_vl(raw, resolution, uv_origin: str = "bottom") -> np.ndarray:
     """VL's depth buffer at ``resolution``: full -> a copy, half -> one chessboard step, quarter -> two.
 
-    Quarter downsamples the *half-res chessboard result* (passes 4 then 6, research §1.8), so its
+    Quarter downsamples the *half-res chessboard result* (passes 4 then 6, SOURCES §1.8), so its
     size is ``floor(floor(W/2)/2) = floor(W/4)``.
     """
     check_choice("resolution", resolution, ("full", "half", "quarter"))

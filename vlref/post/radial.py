@@ -5,7 +5,7 @@ Coordinates: the image's own uv, ``u = (x + 0.5) / W`` right and ``v = (y + 0.5)
 not depend on the uv orientation as long as the light's uv is given in the same convention
 (:func:`light_screen_uv` does this from clip space).
 
-Listing 13-1 (research §3.2), per pixel ``u`` with light ``l``:
+Listing 13-1 (SOURCES §3.2), per pixel ``u`` with light ``l``:
 
     delta = (u - l) * (1/n * Density);  C = tex(u);  dec = 1
     repeat n times:  u -= delta;  C += tex(u) * (dec * Weight);  dec *= Decay
@@ -28,8 +28,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from vlref.errors import InputError
-from vlref.post.resolution import ARGUMENTS, check_choice
+from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
 
@@ -37,7 +36,7 @@ ADDRESS_MODES = ("clamp", "repeat", "border")
 def _image(image) -> np.ndarray:
     a = np.asarray(image, dtype=np.float64)
     if a.ndim not in (2, 3):
-        raise InputError(ARGUMENTS, "image", f"expected (H, W) or (H, W, C), got shape {a.shape}")
+        raise ValueError(f"image: expected (H, W) or (H, W, C), got shape {a.shape}")
     return a
 
 
@@ -123,9 +122,9 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
     check_choice("address", address, ADDRESS_MODES)
     img = _image(image)
     if divisor < 1 or iterations < 0:
-        raise InputError(ARGUMENTS, "num_samples", f"need at least one sample, got {divisor}")
+        raise ValueError(f"num_samples: need at least one sample, got {divisor}")
     if not np.isfinite(light_uv).all():
-        raise InputError(ARGUMENTS, "light_uv", f"must be finite, got {light_uv!r} (use light_screen_uv)")
+        raise ValueError(f"light_uv: must be finite, got {light_uv!r} (use light_screen_uv)")
     img3 = np.ascontiguousarray(img if img.ndim == 3 else img[..., None])
     out = _radial_kernel(img3, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
                          float(weight), float(tap_scale), float(decay), ADDRESS_MODES.index(address))
@@ -147,7 +146,7 @@ def radial_blur(image, light_uv, num_samples: int, density: float, weight: float
 def disenone_scatter(radiated, light_uv, density: float = 1.0, weight: float = 1.0 / 32.0, decay: float = 1.0,
                      num_samples: int = 32, iterations: int = 31, tap_scale: float = 0.03125,
                      address: str = "clamp") -> np.ndarray:
-    """disenone's ``LightScattering`` loop (research §3.4) on the radiated occlusion, before exposure.
+    """disenone's ``LightScattering`` loop (SOURCES §3.4) on the radiated occlusion, before exposure.
 
     ``delta = (u - l) * (1/32 * density)``; the initial term is ``tex(u)``; then **31** steps of
     ``u -= delta``, ``+= tex(u) * ((dec * 0.03125) * weight)``, ``dec *= decay`` -- so the last tap
@@ -182,7 +181,7 @@ def radiate(occlusion, light_uv, radius_px: float = 100.0, peak: float = 0.5) ->
 
 
 def disenone_exposure(exposure: float, angle_deg: float, half_fov_deg: float) -> float:
-    """disenone's exposure dimming (research §3.4): 0 when ``angle + half_fov >= 90``, else
+    """disenone's exposure dimming (SOURCES §3.4): 0 when ``angle + half_fov >= 90``, else
     ``exposure * (1 - (max(angle, half_fov) - half_fov) / half_fov)``.
 
     ``angle_deg`` is the angle between the camera forward and the direction to the light,

@@ -17,32 +17,28 @@ from __future__ import annotations
 
 import numpy as np
 
-from vlref.errors import InputError
-
-ARGUMENTS = "<arguments>"
-"""The ``file`` field of an :class:`InputError` raised for a bad function argument."""
 
 RESOLUTION_FACTORS = {"full": 1, "half": 2, "third": 3, "quarter": 4}
 UV_ORIGINS = ("top", "bottom")
 
 
 def check_choice(key: str, value, choices) -> None:
-    """Raise :class:`InputError` unless ``value`` is one of ``choices``."""
+    """Raise :class:`ValueError` unless ``value`` is one of ``choices``."""
     if value not in choices:
-        raise InputError(ARGUMENTS, key, f"{value!r} is not one of {', '.join(map(str, choices))}")
+        raise ValueError(f"{key}: {value!r} is not one of {', '.join(map(str, choices))}")
 
 
 def check_positive(key: str, value) -> None:
-    """Raise :class:`InputError` unless ``value`` is a finite number > 0."""
+    """Raise :class:`ValueError` unless ``value`` is a finite number > 0."""
     if not (np.isfinite(value) and value > 0):
-        raise InputError(ARGUMENTS, key, f"must be a finite number > 0, got {value!r}")
+        raise ValueError(f"{key}: must be a finite number > 0, got {value!r}")
 
 
 def resolution_factor(resolution) -> int:
     """The divisor ``f`` of a resolution name (full 1, half 2, third 3, quarter 4) or of an int ``f >= 1``."""
     if isinstance(resolution, (int, np.integer)) and not isinstance(resolution, bool):
         if resolution < 1:
-            raise InputError(ARGUMENTS, "resolution", f"factor must be >= 1, got {resolution}")
+            raise ValueError(f"resolution: factor must be >= 1, got {resolution}")
         return int(resolution)
     check_choice("resolution", resolution, tuple(RESOLUTION_FACTORS))
     return RESOLUTION_FACTORS[resolution]
@@ -53,7 +49,7 @@ def low_res_size(width: int, height: int, resolution) -> tuple[int, int]:
     f = resolution_factor(resolution)
     w, h = int(width) // f, int(height) // f
     if w < 1 or h < 1:
-        raise InputError(ARGUMENTS, "resolution", f"{width}x{height} divided by {f} leaves no texel")
+        raise ValueError(f"resolution: {width}x{height} divided by {f} leaves no texel")
     return w, h
 
 
@@ -85,7 +81,7 @@ def nearest_index(n_src: int, n_dst: int) -> np.ndarray:
 
     ``floor(u * n_src)`` with ``u = (i + 0.5) / n_dst``, i.e. ``floor((2i + 1) n_src / (2 n_dst))``,
     clamped to ``[0, n_src - 1]``. An exact texel edge goes to the *upper* texel (D3D's 8-bit
-    sub-texel fixed point, research §2.3/§6.5): with ``f = 2`` low-res texel ``j`` reads full-res
+    sub-texel fixed point, SOURCES §2.3/§6.5): with ``f = 2`` low-res texel ``j`` reads full-res
     texel ``2j + 1``, with ``f = 3`` texel ``3j + 1``, with ``f = 4`` texel ``4j + 2``; full-res
     texel ``i`` reads low-res texel ``floor(i / f)``.
     """
@@ -97,7 +93,7 @@ def point_texel(u, n: int, subtexel_bits: int = 8) -> np.ndarray:
     """Point-sampled texel index at uv ``u`` on ``n`` texels, clamp addressing.
 
     The texel coordinate ``u n`` is first rounded to ``subtexel_bits`` fractional bits (D3D's 8-bit
-    sub-texel precision [K], research §6.5), so a coordinate a rounding error below a texel edge
+    sub-texel precision [K], SOURCES §6.5), so a coordinate a rounding error below a texel edge
     reads the upper texel as the GPU does; then ``floor`` and clamp to ``[0, n - 1]``.
     """
     scale = float(1 << subtexel_bits)

@@ -21,16 +21,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from vlref.errors import InputError
 from vlref.post.blur import depth_delta_at
-from vlref.post.resolution import (ARGUMENTS, bilinear_footprint, check_positive, nearest_index, uv_row_map,
+from vlref.post.resolution import (bilinear_footprint, check_positive, nearest_index, uv_row_map,
                                    uv_rows)
 
 
 def _lo(lo) -> np.ndarray:
     a = np.asarray(lo, dtype=np.float64)
     if a.ndim not in (2, 3):
-        raise InputError(ARGUMENTS, "lo", f"expected (h, w) or (h, w, C), got shape {a.shape}")
+        raise ValueError(f"lo: expected (h, w) or (h, w, C), got shape {a.shape}")
     return a
 
 
@@ -89,7 +88,7 @@ def nearest_upsample(lo, shape_hi, uv_origin: str = "bottom") -> np.ndarray:
 def _depths(depth_lo, depth_hi, lo):
     zl, zh = np.asarray(depth_lo, dtype=np.float64), np.asarray(depth_hi, dtype=np.float64)
     if zl.shape != lo.shape[:2] or zh.ndim != 2:
-        raise InputError(ARGUMENTS, "depth", f"low-res depth {zl.shape} must match {lo.shape[:2]}; "
+        raise ValueError(f"depth: low-res depth {zl.shape} must match {lo.shape[:2]}; "
                                              f"full-res depth must be (H, W), got {zh.shape}")
     return np.ascontiguousarray(zl), np.ascontiguousarray(zh)
 
@@ -162,7 +161,7 @@ def _vl_kernel(lo, zl, zh, ra, rb, ty, ca, cb, tx, threshold, out):
 
 
 def vl_upsample(lo, depth_lo, depth_hi, threshold: float = 1.5, uv_origin: str = "bottom") -> np.ndarray:
-    """VolumetricLights' ``BilateralUpsample`` (research §1.10), on linear eye depth in metres.
+    """VolumetricLights' ``BilateralUpsample`` (SOURCES §1.10), on linear eye depth in metres.
 
     The four low-res texels ``00, 10, 01, 11`` of the bilinear footprint (``1`` = ``+u`` / ``+v``)
     give ``d_k = |z_hi - z_k|``. If ``((d00 + d10) + d01) + d11 < threshold``
@@ -200,7 +199,7 @@ def _nearest_depth_kernel(lo, zl, zh, rows, cols, out):
 
 
 def urp_upsample(fog_lo, depth_lo, depth_hi, neighbours=URP_NEIGHBOURS, uv_origin: str = "bottom") -> np.ndarray:
-    """The URP tutorial's nearest-depth upsample (pass 3, research §2.7), on raw depth.
+    """The URP tutorial's nearest-depth upsample (pass 3, SOURCES §2.7), on raw depth.
 
     Full-res texel ``i`` starts from the low-res texel under it (``nearest_index``: ``floor(i / f)``)
     and considers only the cross neighbours ``(0,+1), (0,-1), (+1,0), (-1,0)`` (clamp addressing) --
@@ -212,7 +211,7 @@ def urp_upsample(fog_lo, depth_lo, depth_hi, neighbours=URP_NEIGHBOURS, uv_origi
     lo = _lo(fog_lo)
     zl, zh = _depths(depth_lo, depth_hi, lo)
     if len(neighbours) == 0:
-        raise InputError(ARGUMENTS, "neighbours", "need at least one candidate offset")
+        raise ValueError("neighbours: need at least one candidate offset")
     h, w = lo.shape[:2]
     du, dv = np.array([n[0] for n in neighbours]), np.array([n[1] for n in neighbours])
     rows = np.clip(nearest_index(h, zh.shape[0])[:, None] + dv[None, :], 0, h - 1)

@@ -6,7 +6,7 @@ the broadcast shape. Units: lengths in metres, coefficients in 1/m, point-light 
 W/sr (radiant intensity, so the irradiance at distance ``r`` is ``I / r²``), directional
 irradiance ``E`` in W/m²; the results are radiances (W/(m² sr)).
 
-Notation (DESIGN.md): a camera ray ``x(t) = o + t·d`` with ``|d| = 1``, integrated over
+Notation (docs/PHYSICS.md "The integral"): a camera ray ``x(t) = o + t·d`` with ``|d| = 1``, integrated over
 ``t ∈ [t0, t1]``; the view transmittance is measured from the ray origin (``t = 0``), so the
 in-scattered radiance is
 

@@ -1,6 +1,6 @@
 """The single-scattering integrand of the quadrature reference, evaluated exactly at one point.
 
-``f(t) = T(0, t) Σ_l σs(x) p(cos θ_l) V_l(x) T_l(x) E_l(x)`` at ``x = o + t d`` (DESIGN.md):
+``f(t) = T(0, t) Σ_l σs(x) p(cos θ_l) V_l(x) T_l(x) E_l(x)`` at ``x = o + t d`` (docs/PHYSICS.md):
 
 * ``σs``, ``σt`` from :func:`vlref.medium.sigma` (the same density the march samples);
 * ``E_l`` from :func:`vlref.lights.shading.light_incidence` (colour × intensity × distance law ×

@@ -1,4 +1,4 @@
-"""The quadrature reference: the single-scattering integral of DESIGN.md solved to a stated accuracy.
+"""The quadrature reference: the single-scattering integral of docs/PHYSICS.md solved to a stated accuracy.
 
 Per pixel ray ``x(t) = o + t d`` (camera position, unit pixel direction), ``t ∈ [0, t1]`` with
 ``t1 = min(surface distance, render.max_distance)``:

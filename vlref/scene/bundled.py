@@ -24,7 +24,8 @@ def scenes_dir() -> Path:
     for c in candidates:
         if c.is_dir():
             return c
-    raise InputError("<installation>", "", "bundled scenes not found (set VLREF_SCENES)")
+    raise InputError(str(candidates[-1]), "", "bundled scenes not found (looked in "
+                     + ", ".join(str(c) for c in candidates) + "; set VLREF_SCENES)")
 
 
 def bundled_scenes() -> dict[str, Path]:

@@ -13,30 +13,20 @@ checks them. Cross-field rules live in each class's ``check()``, which returns
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Optional
 
+from .fields import F
 from .technique_params import TechniqueParams
 
 Vec3 = tuple[float, float, float]
 
-TECHNIQUES = ("physical", "killzone", "slightlymad", "urp", "radial", "froxel")
+TECHNIQUES = tuple(f.name for f in dataclasses.fields(TechniqueParams))
+"""The accepted ``render.technique`` names, one per parameter table (the same as ``vlref.techniques``)."""
 SAMPLINGS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 RESOLUTIONS = ("full", "half", "third", "quarter")
-RESOLUTION_DIVISORS = {"full": 1, "half": 2, "third": 3, "quarter": 4}
 ATTENUATIONS = ("inverse_square", "unity", "windowed")
 CONE_LAWS = ("unity", "linear", "smoothstep")
-
-
-def F(default=dataclasses.MISSING, doc: str = "", **meta):
-    """A dataclass field with documentation and schema constraints in its metadata."""
-    meta["doc"] = doc
-    if isinstance(default, (list, dict)) or (dataclasses.is_dataclass(default) and not isinstance(default, type)):
-        raise TypeError("use factory= for mutable defaults")
-    factory = meta.pop("factory", None)
-    if factory is not None:
-        return field(default_factory=factory, metadata=meta)
-    return field(default=default, metadata=meta)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ Each class holds every user parameter of its source with that source's default, 
 that names a technique and nothing else renders as the source does. Switches named after a
 quirk (``docs/TECHNIQUES.md`` lists them all) default to the source's behaviour; setting one to
 its other value neutralises that quirk. ``docs/TECHNIQUES.md`` gives each parameter's origin
-(file / section of ``research/seed-algorithms.md`` or the thesis, seed 000). Values a source does
+(file / section of ``docs/SOURCES.md`` or of the thesis). Values a source does
 not state are marked ``[U]`` and are inputs with a documented default.
 """
 
@@ -13,15 +13,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Optional
 
-
-def F(default, doc: str = "", **meta):
-    meta["doc"] = doc
-    return field(default=default, metadata=meta)
+from .fields import F
 
 
 @dataclass(frozen=True)
 class PhysicalParams:
-    """The energy-conserving march of DESIGN.md (Hillaire 2015 step integration)."""
+    """The energy-conserving march of docs/PHYSICS.md "The integral" (Hillaire 2015 step integration)."""
 
     steps: int = F(32, "default step count when render.steps is not given", min=1, max=4096)
     sampling: str = F("bayer8", "default offset pattern", choices=("none", "bayer2", "bayer4", "bayer8", "hash"))
@@ -30,7 +27,7 @@ class PhysicalParams:
 
 @dataclass(frozen=True)
 class KillzoneParams:
-    """The thesis (seed 000, sections 2.2.3, 2.2.4, 2.6, 4.2) after Vos, GPU Pro 5 (research section 4).
+    """The thesis (TH in docs/SOURCES.md; sections 2.2.3, 2.2.4, 2.6, 4.2) after Vos, GPU Pro 5 (SOURCES §4).
 
     The medium (``[medium]``: scattering, absorption, anisotropy, fog, noise) and the lights'
     own attenuation / cone / cookie laws are the scene's.
@@ -59,7 +56,7 @@ class KillzoneParams:
 
 @dataclass(frozen=True)
 class SlightlyMadParams:
-    """SlightlyMad/VolumetricLights (seed 001 and its public shaders); defaults from VolumetricLight.cs.
+    """SlightlyMad/VolumetricLights@d20b6f9 (SOURCES §1); defaults from VolumetricLight.cs.
 
     The VL component parameters apply to every light of the scene (VL sets them per light). The medium is
     the scene's by default (``medium = "scene"``); ``medium = "source"`` switches to VL's own parameters.
@@ -125,7 +122,7 @@ class SlightlyMadParams:
 
 @dataclass(frozen=True)
 class UrpParams:
-    """Valerio Marty's URP tutorial (seed 002, research section 2; article listing P1)."""
+    """Valerio Marty's URP tutorial (SOURCES §2: the Medium article's listing P1)."""
 
     steps: int = F(25, "steps (the loop runs steps - 1 times and divides by steps)", min=2, max=4096)
     resolution: str = F("full", "downsampling: full (off), half, third, quarter",
@@ -151,7 +148,7 @@ class UrpParams:
 
 @dataclass(frozen=True)
 class RadialParams:
-    """GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port (seed 004).
+    """GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port (SOURCES §3).
 
     Unset (``None``) values take the variant's default: ``gpugems`` uses F. Sanglard's GLSL port
     values (NOT from the book, which gives none); ``disenone`` uses its C# ``Params`` defaults.

@@ -31,6 +31,7 @@ from ..froxel.grid import column_rays, grid_image, jitter_offsets, slice_depths
 from ..froxel.kernels import froxel_apply, froxel_integrate, froxel_scatter
 from ..froxel.temporal import History, reproject_blend, tile_depth
 from ..medium import pack_medium
+from . import resolved
 
 __all__ = ["render", "grid_bounds"]
 
@@ -44,8 +45,6 @@ def grid_bounds(scene, camera) -> np.ndarray:
 
 def render(scene, frame) -> dict:
     """The froxel passes of ``scene`` (module docstring); ``frame.history`` is the previous frame's state."""
-    from ..render import resolved
-
     p = scene.techniques.froxel
     cam = frame.camera
     gw, gh = p.grid_width, p.grid_height

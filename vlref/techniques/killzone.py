@@ -1,5 +1,5 @@
-"""The ``killzone`` technique: the thesis (seed 000) after Vos, "Volumetric Light Effects in Killzone:
-Shadow Fall" (GPU Pro 5; research §4), pass by pass.
+"""The ``killzone`` technique: the thesis (TH in docs/SOURCES.md) after Vos, "Volumetric Light Effects in Killzone:
+Shadow Fall" (GPU Pro 5; SOURCES §4), pass by pass.
 
 1. depth: linear eye depth min-downsampled to each calculation resolution in use (thesis §4.2.3:
    "finding the smallest value using a min function"): ``depth_half``, ``depth_quarter``;
@@ -29,7 +29,7 @@ from ..post.composite import composite_physical
 from ..post.downsample import downsample_min
 from ..post.resolution import low_res_size
 from ..post.upsample import thesis_upsample
-from ..render import resolved
+from . import resolved
 
 __all__ = ["render", "light_resolutions"]
 
@@ -107,5 +107,4 @@ def render(scene, frame) -> dict:
     out["inscatter"] = light
     out["transmittance"] = trans
     out["final"] = composite_physical(frame.scene_colour, trans, light)
-    out["composite"] = out["final"]
     return out

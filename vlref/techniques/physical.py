@@ -1,4 +1,4 @@
-"""The ``physical`` technique: the energy-conserving single-scattering march of DESIGN.md.
+"""The ``physical`` technique: the energy-conserving single-scattering march of docs/PHYSICS.md "The integral".
 
 Buffers: ``inscatter`` (H, W, 3) = the sum of ``inscatter_light_<i>`` over lights (in light order),
 ``transmittance`` (H, W) = ``exp(-τ(0, t_end))``, ``final = scene_colour · transmittance + inscatter``
@@ -22,6 +22,7 @@ from ..march.patterns import offsets
 from ..march.physical import march_physical
 from ..medium import pack_medium
 from ..progress import bands_for, row_bands
+from . import resolved
 
 __all__ = ["render", "march_buffers", "MARCH_CHUNK", "SAMPLES_PER_BAND"]
 
@@ -63,8 +64,6 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
 
 def render(scene, frame) -> dict[str, np.ndarray]:
     """``inscatter``, ``transmittance``, ``final`` and ``inscatter_light_<i>`` (module docstring)."""
-    from ..render import resolved
-
     per_light, trans = march_buffers(scene, frame.camera, frame.gbuffer.distance, frame.lights, frame.shadow_maps(),
                                      frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
     inscatter = per_light.sum(axis=0) if per_light.shape[0] else np.zeros(per_light.shape[1:], per_light.dtype)

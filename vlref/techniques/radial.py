@@ -1,5 +1,5 @@
-"""The ``radial`` technique: GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port (seed 004),
-research §3.
+"""The ``radial`` technique: GPU Gems 3 ch. 13 (Mitchell, Listing 13-1) and disenone's Unity port,
+SOURCES §3.
 
 Passes (buffers at the occlusion target's size ``W_o x H_o``; ``H_o = occlusion_height`` or the frame
 height, ``W_o = floor(H_o · aspect)``):
@@ -29,13 +29,15 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from ..camera import camera_from_settings
 from ..geometry import raycast, shadow_transmittance
 from ..post.composite import composite_add
 from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, occlusion_opaque,
                            occlusion_transparent, radial_blur, radiate)
 from ..post.upsample import bilinear_upsample
 
-__all__ = ["render", "radial_light", "variant_params", "occlusion_buffer", "disc_coverage", "VARIANT_DEFAULTS"]
+__all__ = ["render", "radial_light", "light_target", "light_in_frame", "variant_params", "occlusion_buffer", "disc_coverage",
+           "VARIANT_DEFAULTS"]
 
 VARIANT_DEFAULTS = {
     "gpugems": dict(num_samples=100, density=0.84, weight=5.65, decay=1.0, exposure=0.0034, fade=False),
@@ -80,6 +82,22 @@ def radial_light(scene) -> int:
     return next((i for i, l in enumerate(scene.lights) if l.type == "directional"), 0)
 
 
+def light_target(light) -> np.ndarray:
+    """The light's homogeneous world position: ``(-direction, 0)`` (at infinity) for a directional light."""
+    if light.type == "directional":
+        return np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0])
+    return np.array([*light.position, 1.0])
+
+
+def light_in_frame(scene) -> bool:
+    """The golden suite's rule (:mod:`vlref.techniques`): the radial light projects inside the frame, in front
+    of the camera; a blur centred off screen (or behind the camera, where the technique fades to nothing)
+    tests only its edge clamping."""
+    cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
+    (u, v), visible = light_screen_uv(cam.view_projection() @ light_target(scene.lights[radial_light(scene)]))
+    return bool(visible > 0.0 and 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0)
+
+
 @njit(cache=True, fastmath=False, parallel=True)
 def _transparent_pass(geo, cam, dirs, t_opaque):
     """RGB transmittance of the transparent surfaces in front of each pixel's opaque hit, prange over pixels."""
@@ -117,10 +135,7 @@ def render(scene, frame) -> dict:
     wo = max(1, int(math.floor(ho * cam.aspect))) if p.occlusion_height else W
     li = radial_light(scene)
     light = scene.lights[li]
-    if light.type == "directional":
-        target = np.array([*(-np.asarray(light.direction, dtype=np.float64)), 0.0])
-    else:
-        target = np.array([*light.position, 1.0])
+    target = light_target(light)
     uv, visibility = light_screen_uv(cam.view_projection() @ target)
     occ = occlusion_buffer(scene, frame, wo, ho, p.variant)
 
@@ -141,5 +156,4 @@ def render(scene, frame) -> dict:
     light_lo = rad * (exposure * visibility)
     inscatter = light_lo if (wo, ho) == (W, H) else bilinear_upsample(light_lo, (H, W))
     return {"occlusion": occ, "light_image": image, "radial": rad, "inscatter": inscatter,
-            "transmittance": np.ones((H, W)), "final": composite_add(frame.scene_colour, inscatter),
-            "composite": composite_add(frame.scene_colour, inscatter)}
+            "transmittance": np.ones((H, W)), "final": composite_add(frame.scene_colour, inscatter)}

@@ -1,4 +1,4 @@
-"""The ``slightlymad`` technique: SlightlyMad/VolumetricLights, pass by pass (research §1, seed 001).
+"""The ``slightlymad`` technique: SlightlyMad/VolumetricLights, pass by pass (SOURCES §1).
 
 Passes (``docs/TECHNIQUES.md`` lists formulas, constants and quirks):
 
@@ -35,8 +35,8 @@ from ..post.composite import FP16_MAX, blend_add_fp16, composite_vl, fp16
 from ..post.downsample import downsample_vl
 from ..post.resolution import low_res_size
 from ..post.upsample import vl_upsample
-from ..render import resolved
 from ..scene.model import Cookie, HeightFog, Medium, Noise
+from . import resolved
 
 __all__ = ["render", "notes", "light_segments", "vl_medium", "srgb_to_linear", "cone_mesh_planes"]
 
@@ -296,7 +296,6 @@ def render(scene, frame) -> dict:
     out["inscatter"] = full[..., :3]
     out["transmittance"] = full[..., 3]
     out["final"] = composite_vl(frame.scene_colour, full)
-    out["composite"] = out["final"]
     return out
 
 

@@ -1,5 +1,5 @@
-"""The ``urp`` technique: Valerio Marty's "Raymarched Volumetric Lighting in Unity URP (Part 1)" (seed 002,
-research §2; the article's listing P1), pass by pass.
+"""The ``urp`` technique: Valerio Marty's "Raymarched Volumetric Lighting in Unity URP (Part 1)" (Medium,
+SOURCES §2; the article's listing P1), pass by pass.
 
 0. march (low res, ``render.resolution`` off/half/third/quarter): :func:`vlref.march.urp.urp_march`
    on the world position reconstructed from the point-sampled raw full-res depth; the hash buffer is
@@ -27,9 +27,9 @@ from ..post.composite import composite_urp, unorm16
 from ..post.downsample import downsample_point
 from ..post.resolution import low_res_size
 from ..post.upsample import urp_upsample
-from ..render import resolved
+from . import resolved
 
-__all__ = ["render", "main_light", "load_jitter"]
+__all__ = ["render", "main_light", "has_main_light", "load_jitter"]
 
 
 def main_light(scene) -> int:
@@ -39,6 +39,12 @@ def main_light(scene) -> int:
             return i
     raise InputError(scene.source or "<scene>", "render.technique",
                      "\"urp\" needs a directional light (the URP main light); the scene has none")
+
+
+def has_main_light(scene) -> bool:
+    """The golden suite's rule (:mod:`vlref.techniques`): scenes with a directional light, the tutorial's
+    main light (the march lights nothing else)."""
+    return any(light.type == "directional" for light in scene.lights)
 
 
 def load_jitter(path: str, width: int, height: int, file: str = "<scene>") -> np.ndarray:
@@ -95,5 +101,4 @@ def render(scene, frame) -> dict:
     inscatter = (full * p.intensity)[..., None] * colour
     return {"jitter": rand, "march": fog, "blur_h": blur_h, "blur_v": blur_v, "depth_low": depth_low,
             "depth_raw": raw_full, "upsample": full, "inscatter": inscatter, "transmittance": np.ones((H, W)),
-            "final": composite_urp(frame.scene_colour, full, p.intensity, colour),
-            "composite": composite_urp(frame.scene_colour, full, p.intensity, colour)}
+            "final": composite_urp(frame.scene_colour, full, p.intensity, colour)}

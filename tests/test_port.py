@@ -7,8 +7,8 @@ import pytest
 from vlref.camera import Camera, camera_from_settings, euler_matrix, linear_to_raw
 from vlref.errors import InputError
 from vlref.oracle.compare import compare_arrays
-from vlref.oracle.port_buffers import (FAR_VALUE, camera_from_matrices, decode_depth, export_port, main_march,
-                                       march_port, orthographic)
+from vlref.cli import main
+from vlref.port import FAR_VALUE, camera_from_matrices, decode_depth, export_port, march_port, orthographic
 from vlref.render import render
 from vlref.scene import load_scene
 
@@ -48,10 +48,11 @@ def test_camera_from_matrices_round_trip(forward, convention):
 
 def test_camera_from_matrices_rejects_wrong_aspect_and_handedness():
     cam = Camera(np.zeros(3), np.eye(3), 60.0, 64, 36, 0.1, 100.0)
-    with pytest.raises(InputError, match="aspect"):
-        camera_from_matrices(cam.view_matrix(), cam.projection_matrix(), 64, 64)
-    with pytest.raises(InputError, match="camera.view"):
+    with pytest.raises(InputError, match="port.toml: camera.projection: aspect"):
+        camera_from_matrices(cam.view_matrix(), cam.projection_matrix(), 64, 64, file="port.toml")
+    with pytest.raises(ValueError, match="camera.view") as err:  # a Python caller's matrices: not a file's
         camera_from_matrices(np.diag([1.0, 1.0, -1.0, 1.0]) @ cam.view_matrix(), cam.projection_matrix(), 64, 36)
+    assert not isinstance(err.value, InputError)
 
 
 def _roundtrip(tmp_path, scene, technique, **encodings):
@@ -96,26 +97,30 @@ def test_marched_port_differs_when_its_shadow_map_is_wrong(tmp_path):
 
 def test_cli_writes_buffers_and_rejects_bad_manifests(tmp_path, capsys):
     manifest = export_port("pillars", tmp_path / "port", (*SMALL, 'render.technique="killzone"'))
-    assert main_march([str(manifest), "-o", str(tmp_path / "out"), "-q"]) == 0
+    assert main(["march", str(manifest), "-o", str(tmp_path / "out"), "-q"]) == 0
     assert {p.name for p in (tmp_path / "out").iterdir()} >= {"final.exr", "inscatter.exr", "depth.exr"}
 
     text = manifest.read_text()
     cases = {"no_depth.toml": text.replace('path = "depth.exr"', 'path = "missing.exr"'),
              "bad_atlas.toml": text.replace("atlas = [1, 1]", "atlas = [2, 1]"),
              "bad_conv.toml": text.replace('encoding = "raw"', 'encoding = "log"'),
-             "bad_light.toml": text.replace("light = 0", "light = 3")}
+             "bad_light.toml": text.replace("light = 0", "light = 3"),
+             "typo.toml": text.replace('uv_origin = "top"', 'uv_orgin = "top"', 1),
+             "bad_matrix.toml": text.replace("view = [[", "view = [[0.0, 0.0, 0.0, 0.0], [", 1)}
     for name, body in cases.items():
         (tmp_path / "port" / name).write_text(body)
-        assert main_march([str(tmp_path / "port" / name), "-o", str(tmp_path / name)]) == 2, name
+        assert main(["march", str(tmp_path / "port" / name), "-o", str(tmp_path / name)]) == 2, name
         assert not (tmp_path / name).exists()
     err = capsys.readouterr().err
     assert "depth.path" in err and "atlas" in err and "depth.encoding" in err and "no light 3" in err
+    assert "depth.uv_orgin: unknown key, did you mean uv_origin?" in err
+    assert "camera.view: must be a 4x4 matrix (4 rows of 4), got 5 rows" in err
 
 
 def test_camera_defaults_to_the_scene_camera(tmp_path):
     overrides = (*SMALL, 'render.technique="physical"')
     manifest = export_port("pillars", tmp_path / "p", overrides, camera_matrices=False)
-    from vlref.oracle.port_buffers import load_port
+    from vlref.port import load_port
     port = load_port(manifest)
     cam = camera_from_settings(load_scene("pillars", overrides).camera, 48, 27)
     np.testing.assert_array_equal(port.camera.rotation, cam.rotation)

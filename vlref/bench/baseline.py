@@ -22,12 +22,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from .lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_INV_RANGE2, F_PX, F_PY,
-                          F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ)
-from .lights.shadowmaps import S_OFFSET, S_RES, S_STRENGTH
-from .march.segments import light_segment
-from .medium import FOG_MAX_EXPONENT, M_FOG_BASE, M_FOG_K, M_G, M_SS, M_ST
-from .phase import hg_array
+from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_INV_RANGE2, F_PX, F_PY,
+                           F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ)
+from ..lights.shadowmaps import S_OFFSET, S_RES, S_STRENGTH
+from ..march.segments import light_segment
+from ..medium import FOG_MAX_EXPONENT, M_FOG_BASE, M_FOG_K, M_G, M_SS, M_ST
+from ..phase import hg_array
 
 __all__ = ["light_segments", "march_spot_numpy"]
 

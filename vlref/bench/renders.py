@@ -1,0 +1,100 @@
+"""Sections ``reference``, ``first_render`` and ``memory``: whole renders, the last two in fresh interpreters."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+from pathlib import Path
+
+import numba
+
+from .config import BenchConfig, bench_scene
+
+__all__ = ["bench_reference", "bench_first_render", "bench_memory"]
+
+
+def bench_reference(cfg: BenchConfig) -> dict:
+    from ..reference import render_reference
+
+    w, h = cfg.reference
+    scene = bench_scene(w, h, cfg.steps, "one", cfg.shadow_resolution)
+    render_reference(bench_scene(2, 1, cfg.steps, "one", cfg.shadow_resolution), rel_tol=1e-4)  # JIT warm-up
+    start = time.perf_counter()
+    res = render_reference(scene, rel_tol=1e-4)
+    seconds = time.perf_counter() - start
+    per_pixel = seconds / (w * h)
+    tw, th = cfg.reference_target
+    return {"width": w, "height": h, "rel_tol": 1e-4, "seconds": seconds, "seconds_per_pixel": per_pixel,
+            "threads": numba.get_num_threads(), "max_error": float(res.max_error),
+            "estimate_target_size": [tw, th], "estimate_seconds": per_pixel * tw * th}
+
+
+_CHILD = """
+import json, resource, sys, time
+t0 = time.perf_counter()
+from vlref.bench import bench_scene
+from vlref.render import render
+t1 = time.perf_counter()
+render(bench_scene({w}, {h}, {steps}, {lights!r}, {res}))
+t2 = time.perf_counter()
+peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+try:  # VmHWM is this address space's own peak; ru_maxrss keeps the parent's across exec on Linux
+    status = open("/proc/self/status").read().split("VmHWM:")[1]
+    peak = int(status.split()[0]) * 1024
+except (OSError, IndexError, ValueError):
+    pass
+print(json.dumps({{"import_s": t1 - t0, "render_s": t2 - t1, "maxrss_bytes": peak}}))
+"""
+
+
+def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: int) -> dict:
+    """Run a fresh interpreter that renders the benchmark scene; its report plus the process wall time.
+
+    ``cache_dir``: the child's ``NUMBA_CACHE_DIR`` (None: this process's setting).
+    """
+    env = dict(os.environ)
+    if cache_dir is not None:
+        env["NUMBA_CACHE_DIR"] = cache_dir
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(Path(__file__).resolve().parents[2]),
+                                                    env.get("PYTHONPATH")) if p)
+    code = _CHILD.format(w=w, h=h, steps=steps, lights=lights, res=res)
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    wall = time.perf_counter() - start
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    report["process_s"] = wall
+    return report
+
+
+def bench_first_render(cfg: BenchConfig) -> dict:
+    """A fresh process renders (a): with a fresh cache, then with the cache it filled (``cold_cache``), else
+    only with this process's cache (warm; ``cold`` is then None)."""
+    w, h = cfg.first_render
+    if not cfg.cold_cache:
+        warm = _child(None, w, h, cfg.steps, "one", cfg.shadow_resolution)
+        return {"width": w, "height": h, "cold": None, "warm": warm, "note": "cold run skipped (--quick)"}
+    with tempfile.TemporaryDirectory(prefix="vlref_bench_cache_") as cache:
+        cold = _child(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
+        warm = _child(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
+    return {"width": w, "height": h, "cold": cold, "warm": warm, "note": ""}
+
+
+def bench_memory(cfg: BenchConfig) -> dict:
+    from ..render import render
+
+    scene = bench_scene(cfg.width, cfg.height, cfg.memory_steps, "four", cfg.shadow_resolution)
+    render(scene)  # JIT warm-up: compiling allocates too
+    tracemalloc.start()
+    try:
+        render(scene)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    child = _child(None, cfg.width, cfg.height, cfg.memory_steps, "four", cfg.shadow_resolution)
+    return {"width": cfg.width, "height": cfg.height, "lights": 4, "steps": cfg.memory_steps,
+            "tracemalloc_peak_bytes": int(peak), "subprocess_maxrss_bytes": int(child["maxrss_bytes"])}

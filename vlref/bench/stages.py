@@ -1,0 +1,86 @@
+"""Sections ``raycast``, ``shadow_maps`` and ``post``: the frame's stages and each post pass, plus the
+explorer notebook's ``preview`` re-render."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .config import BenchConfig, bench_scene, median_time
+
+__all__ = ["bench_geometry", "bench_post"]
+
+
+def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
+    """Raycast (primary rays/s) and shadow maps (texels/s) of (b), plus the bundled scenes."""
+    from ..camera import camera_from_settings
+    from ..geometry import build_geometry, raycast
+    from ..lights import pack_lights
+    from ..lights.shadowmaps import build_shadow_maps
+    from ..scene import load_scene
+
+    def measure(scene):
+        cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
+        geo = build_geometry(scene)
+        packed = pack_lights(scene)
+        rc = median_time(lambda: raycast(scene, cam, geo), cfg.repeats)
+        sm_seconds = median_time(lambda: build_shadow_maps(scene, cam, geo, packed), cfg.repeats)
+        texels = int(build_shadow_maps(scene, cam, geo, packed).data.size)
+        rays = scene.render.width * scene.render.height
+        return ({"width": scene.render.width, "height": scene.render.height, "seconds": rc, "rays_per_s": rays / rc},
+                {"texels": texels, "seconds": sm_seconds, "texels_per_s": texels / sm_seconds})
+
+    rc, sm = measure(bench_scene(cfg.width, cfg.height, cfg.steps, "four", cfg.shadow_resolution))
+    rc_out, sm_out = {"bench_four_lights": rc}, {"bench_four_lights": sm}
+    for name in cfg.bundled:
+        rc_out[name], sm_out[name] = measure(load_scene(name, ["render.width=320", "render.height=180"]))
+    return rc_out, sm_out
+
+
+def bench_post(cfg: BenchConfig) -> dict:
+    """Each post pass at ``cfg.width x cfg.height`` (half-resolution inputs where the pass takes them)."""
+    from ..post.blur import blur_hv, thesis_blur_pass
+    from ..post.composite import composite_physical
+    from ..post.downsample import downsample_min
+    from ..post.radial import radial_blur
+    from ..post.upsample import thesis_upsample, urp_upsample, vl_upsample
+    from ..notebook import PreviewRenderer
+    from ..render import render
+
+    h, w = cfg.height, cfg.width
+    rng = np.random.default_rng(0)
+    depth = rng.uniform(1.0, 30.0, size=(h, w))
+    depth_lo = downsample_min(depth, "half")
+    lo = rng.random(depth_lo.shape + (3,))
+    full = rng.random((h, w, 3))
+    trans = rng.random((h, w))
+    passes = {
+        "downsample_min_half": lambda: downsample_min(depth, "half"),
+        "thesis_upsample": lambda: thesis_upsample(lo, depth_lo, depth),
+        "vl_upsample": lambda: vl_upsample(lo, depth_lo, depth),
+        "urp_upsample": lambda: urp_upsample(lo, depth_lo, depth),
+        "bilateral_blur_hv": lambda: blur_hv(thesis_blur_pass, full, depth),
+        "radial_blur_64": lambda: radial_blur(full, (0.5, 0.4), 64, 0.9, 0.5, 0.97, 0.3),
+        "composite": lambda: composite_physical(full, trans, full),
+    }
+    out = {name: {"seconds": median_time(fn, cfg.repeats), "width": w, "height": h} for name, fn in passes.items()}
+    pw, ph, steps = cfg.preview
+    scene = bench_scene(pw, ph, steps, "one", cfg.shadow_resolution, technique="killzone", resolution="half")
+    # A slider move re-renders with the frame (geometry, G-buffer, shadow maps) reused, as the explorer
+    # notebook does; the first render (frame included) is timed too.
+    first = render(scene).timings
+    renderer = PreviewRenderer()
+    renderer.render(scene)
+    variants = [scene.replace(medium=dataclasses.replace(scene.medium, anisotropy=g)) for g in (0.3, 0.5)]
+    count = [0]
+
+    def preview():
+        count[0] += 1
+        renderer.render(variants[count[0] % 2])
+
+    seconds = median_time(preview, cfg.repeats)
+    out["preview"] = {"seconds": seconds, "width": pw, "height": ph, "steps": steps, "technique": "killzone",
+                      "resolution": "half", "what": "re-render after a medium change, frame reused",
+                      "first_render_stages": dict(first)}
+    return out

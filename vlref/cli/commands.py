@@ -1,0 +1,125 @@
+"""The ``vlref`` command: one table of sub-commands, each a module of this package.
+
+Every command module holds ``HELP`` (its line in ``vlref --help``; None: not listed there), ``parser()``
+(its :class:`argparse.ArgumentParser`, ``prog="vlref <command>"``) and ``run(args) -> int`` (0 success;
+``compare``/``golden verify``: 1 failed), which calls library functions that return values and raise
+:class:`vlref.errors.InputError` on bad input. :func:`main` parses, runs, and maps the outcome to the
+exit code: 2 and ``<prefix>: error: FILE: key: reason`` for bad input (nothing is written), the
+cluster's code for failed items (:class:`vlref.cluster.ItemsFailed`), 130 / 143 on SIGINT / SIGTERM.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib
+import signal
+import sys
+import threading
+
+from .. import __version__
+from ..cluster import ItemsFailed
+from ..errors import InputError
+
+__all__ = ["COMMANDS", "command", "build_parser", "main", "Interrupted"]
+
+COMMANDS = {
+    # name: (module of vlref.cli, prefix of its error messages)
+    "render": ("render", "vlref"),
+    "scenes": ("scenes", "vlref"),
+    "reference": ("reference", "vlref"),
+    "bias": ("bias", "vlref"),
+    "sweep": ("sweep", "vlref"),
+    "compare": ("compare", "vlref compare"),
+    "golden": ("golden", "vlref golden"),
+    "march": ("march", "vlref march"),
+    "march export": ("march_export", "vlref march export"),
+    "bench": ("bench", "vlref bench"),
+    "warmup": ("warmup", "vlref"),
+}
+"""Sub-commands; a two-word name (``march export``) is matched before its first word."""
+
+
+def command(name: str):
+    """The module of sub-command ``name`` (imported when used)."""
+    return importlib.import_module(f"vlref.cli.{COMMANDS[name][0]}")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The top-level parser: ``--version``, and every listed sub-command with its help line."""
+    p = argparse.ArgumentParser(prog="vlref", description="vlref: a CPU reference renderer for real-time "
+                                "volumetric lighting (god rays). Exit codes: 0 ok, 1 compare/verify failed, 2 bad input, "
+                                "130/143 interrupted (Ctrl-C / SIGTERM).")
+    p.add_argument("--version", action="version", version=f"vlref {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    for name in COMMANDS:
+        text = command(name).HELP
+        if text is not None:
+            sub.add_parser(name, help=text, add_help=False)  # listed in --help; run by main() with its own parser
+    return p
+
+
+class Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT (Ctrl-C) or SIGTERM while a ``vlref`` command runs."""
+
+    def __init__(self, signum: int):
+        super().__init__(signum)
+        self.signum = signum
+
+
+def _raise_interrupted(signum, frame):
+    # Further signals are ignored from here on, so the clean-up the exception unwinds through (temporary
+    # files and folders of vlref.io) runs to its end.
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
+    raise Interrupted(signum)
+
+
+@contextlib.contextmanager
+def _interruptible():
+    """SIGINT and SIGTERM raise :class:`Interrupted` inside the block (main thread only); handlers restored after."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = {sig: signal.signal(sig, _raise_interrupted) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run a command. Ctrl-C or SIGTERM: one line ``vlref: interrupted``, exit 130 / 143 (128 + signal),
+    no partial output (files are written atomically, folders all or nothing: :mod:`vlref.io`)."""
+    with _interruptible():
+        try:
+            return _run(list(sys.argv[1:] if argv is None else argv))
+        except KeyboardInterrupt as exc:
+            print("vlref: interrupted", file=sys.stderr)
+            return 128 + int(getattr(exc, "signum", signal.SIGINT))
+
+
+def _run(argv: list[str]) -> int:
+    name = " ".join(argv[:2]) if " ".join(argv[:2]) in COMMANDS else argv[0] if argv else None
+    if name not in COMMANDS:
+        try:
+            build_parser().parse_args(argv)  # --help, --version, or a usage error
+        except SystemExit as exc:  # argparse: 2 on bad usage, 0 on --help/--version
+            return int(exc.code or 0)
+        return 2  # pragma: no cover - parse_args always exits here
+    rest = argv[len(name.split()):]
+    cmd, prefix = command(name), COMMANDS[name][1]
+    try:
+        args = cmd.parser().parse_args(rest)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    args.argv = rest
+    try:
+        return int(cmd.run(args))
+    except InputError as exc:
+        print(f"{prefix}: error: {exc}", file=sys.stderr)
+        return 2
+    except ItemsFailed as exc:
+        print(f"{prefix}: {exc}", file=sys.stderr)
+        return 2 if exc.bad_input else 1

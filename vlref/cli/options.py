@@ -1,0 +1,72 @@
+"""Options shared by several commands, and the scene they name (checked before any work)."""
+
+from __future__ import annotations
+
+import argparse
+
+__all__ = ["add_scene_arguments", "add_scheduler_argument", "technique_names", "load_scene_checked",
+           "preview_exposure"]
+
+
+def technique_names() -> str:
+    """The techniques, comma-separated, for help texts."""
+    from ..scene.model import TECHNIQUES
+    return ", ".join(TECHNIQUES)
+
+
+def add_scene_arguments(p: argparse.ArgumentParser, required: bool = False) -> None:
+    """``scene`` (optional unless ``required``), ``--set`` and ``--ignore-memory-check``."""
+    if required:
+        p.add_argument("scene", help="scene file (TOML/JSON) or bundled scene name (see `vlref scenes`)")
+    else:
+        p.add_argument("scene", nargs="?", default=None,
+                       help="scene file (TOML/JSON) or bundled scene name (default: the bundled default)")
+    p.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
+                   help="override any scene field, e.g. render.width=320 or lights.0.intensity=20 "
+                        "(repeatable; default: none)")
+    p.add_argument("--ignore-memory-check", action="store_true",
+                   help="render even when the estimated peak memory exceeds the available memory "
+                        "(default: refuse, exit 2)")
+
+
+def add_scheduler_argument(p: argparse.ArgumentParser) -> None:
+    """The ``--scheduler`` option shared by ``golden``, ``reference`` and ``sweep``
+    (:func:`vlref.cluster.parse_scheduler` reads it)."""
+    p.add_argument("--scheduler", metavar="local[:N]|tcp://HOST:PORT",
+                   help="run the independent items on Dask (pip install 'vlref[distributed]'): a "
+                        "LocalCluster of N worker processes (default: one per core), or an existing "
+                        "scheduler; default: in this process")
+
+
+def load_scene_checked(args):
+    """The scene of ``args`` with its overrides; the output folder and the memory estimate are checked
+    first (before any work), unless ``--ignore-memory-check``."""
+    from ..io import check_output_dir
+    from ..memory import check_memory
+    from ..scene import load_scene
+
+    if getattr(args, "output", None):
+        check_output_dir(args.output)
+    overrides = list(args.set or [])
+    if getattr(args, "technique", None):
+        overrides.append(f'render.technique="{args.technique}"')
+    scene = load_scene(args.scene, overrides)
+    if not args.ignore_memory_check:
+        check_memory(scene)
+    return scene
+
+
+def preview_exposure(scene, image) -> tuple[float, dict[str, str], str]:
+    """The PNG preview's exposure ``render.exposure x 1/p``, ``p`` the ``render.auto_exposure`` percentile of
+    ``image``'s luminance (``render.exposure`` alone when that is 0); its PNG tEXt and a summary phrase."""
+    from ..io import luminance, percentile_exposure
+
+    r = scene.render
+    if r.auto_exposure <= 0.0:
+        rule = f"render.exposure {r.exposure:g}"
+        return r.exposure, {"vlref_exposure_rule": rule}, f"preview exposure {r.exposure:.4g}"
+    auto, level = percentile_exposure(luminance(image), r.auto_exposure)
+    exposure = r.exposure * auto
+    rule = (f"render.exposure {r.exposure:g} / luminance {level:.6g} at percentile {r.auto_exposure:g} of the "
+            "image (render.auto_exposure; 0 = off)")
+    return exposure, {"vlref_exposure_rule": rule}, f"preview exposure {exposure:.4g} = 1/p{r.auto_exposure:g} luminance"
