@@ -1,4 +1,4 @@
-"""The shape of the code: small signatures and named light kinds (issue 16).
+"""The shape of the code: small signatures and named light kinds.
 
 Kernels take records (:class:`vlref.lights.pack.PackedLights`, :class:`vlref.medium.PackedMedium`,
 :class:`vlref.lights.shadowmaps.ShadowTable`, the geometry arrays) rather than long lists of positional
