@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from vlref.cli import build_parser
+from vlref.cli.commands import command
 from vlref.oracle.golden import load_suite, suite_entries
 from vlref.scene import bundled_scenes, load_scene
 from vlref.scene.model import TECHNIQUES as SCENE_TECHNIQUES
@@ -49,7 +49,7 @@ def test_the_scene_model_the_cli_the_golden_suite_and_the_goldens_name_the_regis
     stored = json.loads(GOLDEN_MANIFEST.read_text())
     assert tuple(stored["suite"]["techniques"]) == names
     assert {e["technique"] for e in stored["entries"]} == set(names)
-    render = build_parser()._subparsers._group_actions[0].choices["render"]
+    render = command("render").parser()
     technique_help = next(a.help for a in render._actions if "--technique" in a.option_strings)
     assert f"({', '.join(names)})" in technique_help
 
