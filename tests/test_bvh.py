@@ -46,7 +46,7 @@ def test_closest_matches_brute_force(seed, n, clustered, tmax):
     for k in range(len(o)):
         for opaque_only in (False, True):
             t, i = bvh_closest(bvh.node_min, bvh.node_max, bvh.node_first, bvh.node_count, v0, e1, e2, opaque,
-                               opaque_only, *o[k], *d[k], 0.0, tmax)
+                               opaque_only, (*o[k], *d[k]), 0.0, tmax)
             brute = [hit_triangle(v0, e1, e2, j, *o[k], *d[k], 0.0, tmax) if opaque[j] or not opaque_only
                      else math.inf for j in range(n)]
             assert t == min(brute)
@@ -68,7 +68,7 @@ def test_transmittance_matches_brute_force(seed, n, clustered):
     o, d = rays(seed, 40)
     for k in range(len(o)):
         got = bvh_transmittance(bvh.node_min, bvh.node_max, bvh.node_first, bvh.node_count, v0, e1, e2, tri_obj,
-                                opacity, tint, *o[k], *d[k], 1e-9, 1.0)
+                                opacity, tint, (*o[k], *d[k]), 1e-9, 1.0)
         crossings = {(tri_obj[j], hit_triangle(v0, e1, e2, j, *o[k], *d[k], 1e-9, 1.0)) for j in range(n)}
         expect = np.ones(3)
         for obj, t in crossings:  # one crossing per (object, t): coincident triangles count once
@@ -116,7 +116,7 @@ def test_empty_input():
     bvh = build_bvh(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros((0, 3)))
     z = np.zeros((0, 3))
     assert bvh_closest(bvh.node_min, bvh.node_max, bvh.node_first, bvh.node_count, z, z, z,
-                       np.zeros(0, bool), False, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, math.inf) == (math.inf, -1)
+                       np.zeros(0, bool), False, (0.0, 0.0, 0.0, 0.0, 0.0, 1.0), 0.0, math.inf) == (math.inf, -1)
 
 
 def test_build_100k_triangles_is_fast():

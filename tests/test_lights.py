@@ -128,8 +128,8 @@ def test_spot_cookie_projection_and_incidence(tmp_path):
     p = pack_lights(Scene(lights=(light,)))
     assert spot_cookie_uv(1.0, 0.0, 1.0, 1.0) == pytest.approx((1.0, 0.5))
     # light frame of direction +z is the world frame (right = +x, up = +y)
-    bright = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 0.3, 0.3, 2.0)
-    dark = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, -0.3, 0.3, 2.0)
+    bright = light_incidence(p, 0, 0.3, 0.3, 2.0)
+    dark = light_incidence(p, 0, -0.3, 0.3, 2.0)
     assert bright[4] == pytest.approx(1.0 / (0.18 + 4.0)) and dark[4] == 0.0
 
 
@@ -139,13 +139,13 @@ def test_incidence_of_each_light_type():
               Light(type="spot", position=(0.0, 5.0, 0.0), direction=(0.0, -1.0, 0.0), spot_angle=60.0,
                     intensity=2.0, range=20.0))
     p = pack_lights(Scene(lights=lights))
-    lx, ly, lz, dist, er, eg, eb = light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 1.0, 2.0, 5.0)
+    lx, ly, lz, dist, er, eg, eb = light_incidence(p, 0, 1.0, 2.0, 5.0)
     assert (lx, ly, lz, dist) == pytest.approx((0.0, 0.0, -1.0, 2.0))
     assert (er, eg, eb) == pytest.approx((2.0, 1.0, 0.5))
-    assert light_incidence(p.ints, p.floats, p.cookies, p.lut, 0, 1.0, 2.0, 13.5)[4] == 0.0  # beyond range
-    out = light_incidence(p.ints, p.floats, p.cookies, p.lut, 1, 7.0, -3.0, 1.0)
+    assert light_incidence(p, 0, 1.0, 2.0, 13.5)[4] == 0.0  # beyond range
+    out = light_incidence(p, 1, 7.0, -3.0, 1.0)
     assert out[:3] == pytest.approx((0.0, 1.0, 0.0)) and out[3] == np.inf and out[4:] == pytest.approx((3.0,) * 3)
-    on_axis = light_incidence(p.ints, p.floats, p.cookies, p.lut, 2, 0.0, 1.0, 0.0)
+    on_axis = light_incidence(p, 2, 0.0, 1.0, 0.0)
     assert on_axis[4] == pytest.approx(2.0 / 16.0)
-    assert light_incidence(p.ints, p.floats, p.cookies, p.lut, 2, 3.0, 4.0, 0.0)[4] == 0.0  # outside the cone
+    assert light_incidence(p, 2, 3.0, 4.0, 0.0)[4] == 0.0  # outside the cone
     assert p.floats[0, F_CR] == 8.0

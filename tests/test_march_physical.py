@@ -45,15 +45,9 @@ def _run(scene, steps, beta, sigma_t=None, distance=None):
     per = np.zeros((lights.count, h, w, 3))
     trans = np.empty((h, w))
     march_physical(cam.position, cam.ray_directions(), np.minimum(dist, scene.render.max_distance),
-                   np.full((h, w), beta), steps, medium.params, medium.noise, lights.ints, lights.floats,
-                   lights.cookies, lights.lut, *_shadow_args(lights.count), build_geometry(scene).arrays,
-                   scene.techniques.physical.light_extinction, 4, per, trans)
+                   np.full((h, w), beta), steps, medium, lights, _no_shadows(lights.count).table,
+                   build_geometry(scene).arrays, scene.techniques.physical.light_extinction, 4, per, trans)
     return per, trans, cam
-
-
-def _shadow_args(n):
-    s = _no_shadows(n)
-    return s.ints, s.floats, s.data, s.tint
 
 
 def _closed_form_point(cam, p, sigma_s, intensity, t0, t1):

@@ -52,8 +52,7 @@ def _compare(light, kind, points, filt, margin=0.12, transparent=False):
         geo = build_geometry(scene)
         packed = pack_lights(scene)
         sm = maps[f] = build_shadow_maps(scene, cam, geo, packed)
-        vis[f] = np.array([shadow_visibility(sm.ints, sm.floats, sm.data, sm.tint, geo.arrays, kind, packed.floats,
-                                             0, *p) for p in points])
+        vis[f] = np.array([shadow_visibility(sm.table, geo.arrays, kind, packed.floats, 0, *p) for p in points])
     away = _edge_distance(points, light, kind) > margin
     assert away.sum() > 0.5 * len(points)
     assert (vis["exact"][away] == 0).any() and (vis["exact"][away] > 0).any()  # the test sees both

@@ -27,7 +27,7 @@ the box; without noise it is analytic (homogeneous ``σt · L``; height fog in c
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -45,9 +45,9 @@ FOG_MAX_EXPONENT = 60.0
 NM = 20
 
 
-@dataclass(frozen=True)
-class PackedMedium:
-    """``params`` (NM,) float (columns ``M_*``) and the noise lattice ``noise`` (P, P, P) float."""
+class PackedMedium(NamedTuple):
+    """The medium record the njit kernels take: ``params`` (NM,) float (columns ``M_*``) and the noise
+    lattice ``noise`` (P, P, P) float."""
 
     params: np.ndarray
     noise: np.ndarray

@@ -25,7 +25,7 @@ from numba import njit, prange
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_INV_RANGE2, F_PX, F_PY,
                            F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ)
 from ..lights.shadowmaps import S_OFFSET, S_RES, S_STRENGTH
-from ..march.physical import light_segment
+from ..march.segments import light_segment
 from ..medium import FOG_MAX_EXPONENT, M_FOG_BASE, M_FOG_K, M_G, M_SS, M_ST
 from ..phase import hg_array
 
@@ -33,13 +33,13 @@ __all__ = ["light_segments", "march_spot_numpy"]
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def light_segments(li, lf, origin, dirs, t_end, out):
+def light_segments(lights, origin, dirs, t_end, out):
     """``out[k, y, x] = (a, b)``: the segment of pixel ray ``(y, x)`` inside light ``k`` (empty when ``b <= a``)."""
     h, w = t_end.shape
     for p in prange(h * w):
         i, j = p // w, p % w
-        for k in range(li.shape[0]):
-            a, b = light_segment(li, lf, k, origin[0], origin[1], origin[2], dirs[i, j, 0], dirs[i, j, 1],
+        for k in range(lights.ints.shape[0]):
+            a, b = light_segment(lights, k, origin[0], origin[1], origin[2], dirs[i, j, 0], dirs[i, j, 1],
                                  dirs[i, j, 2], t_end[i, j])
             out[k, i, j, 0], out[k, i, j, 1] = a, b
 

@@ -12,7 +12,7 @@ from numba import njit, prange
 
 from ..lights.pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY,
                            F_UZ)
-from ..march.physical import light_segment
+from ..march.segments import light_segment
 from ..scene.model import Scene
 from .config import THREADS, BenchConfig, bench_scene, median_time
 
@@ -20,14 +20,14 @@ __all__ = ["march_samples", "bench_march", "plain_march", "bench_baseline", "ben
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _active(li, lf, origin, dirs, t_end, out):
+def _active(lights, origin, dirs, t_end, out):
     """``out[y, x]`` = number of lights whose volume the pixel ray crosses (non-empty segment)."""
     h, w = t_end.shape
     for p in prange(h * w):
         i, j = p // w, p % w
         n = 0
-        for k in range(li.shape[0]):
-            a, b = light_segment(li, lf, k, origin[0], origin[1], origin[2], dirs[i, j, 0], dirs[i, j, 1],
+        for k in range(lights.ints.shape[0]):
+            a, b = light_segment(lights, k, origin[0], origin[1], origin[2], dirs[i, j, 0], dirs[i, j, 1],
                                  dirs[i, j, 2], t_end[i, j])
             n += 1 if b > a else 0
         out[i, j] = n
@@ -38,8 +38,7 @@ def march_samples(scene: Scene, frame) -> int:
     dirs = frame.camera.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
     count = np.empty(t_end.shape, dtype=np.int64)
-    _active(frame.lights.ints, frame.lights.floats.astype(np.float64), np.asarray(frame.camera.position, float),
-            dirs, t_end, count)
+    _active(frame.lights.astype(np.float64), np.asarray(frame.camera.position, float), dirs, t_end, count)
     return int(count.sum()) * int(scene.render.steps)
 
 
@@ -120,7 +119,7 @@ def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict
 
     scene, frame, sm, dirs, t_end, lf, origin = _one_spot_frame(cfg, width, height)
     seg = np.empty((1, height, width, 2))
-    light_segments(frame.lights.ints, lf, origin, dirs, t_end, seg)
+    light_segments(frame.lights._replace(floats=lf), origin, dirs, t_end, seg)
     out = np.empty((height, width))
     before = numba.get_num_threads()
     numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
@@ -149,7 +148,7 @@ def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
 
     def run():
         seg = np.empty((1, h, w, 2))
-        light_segments(frame.lights.ints, lf, origin, dirs, t_end, seg)
+        light_segments(frame.lights._replace(floats=lf), origin, dirs, t_end, seg)
         return march_spot_numpy(origin, dirs, t_end, beta, cfg.steps, mp, lf, sm.ints, sm.floats, sm.data, seg)
 
     seconds = median_time(run, 1)

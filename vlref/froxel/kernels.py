@@ -29,7 +29,7 @@ import math
 
 from numba import njit, prange
 
-from ..lights.pack import I_KIND
+from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shading import light_incidence
 from ..lights.shadowmaps import shadow_visibility
 from ..medium import M_BOUNDED, M_G, M_SS, M_ST, density, optical_depth
@@ -40,22 +40,26 @@ __all__ = ["froxel_scatter", "froxel_integrate", "froxel_apply", "in_scattering"
 
 
 @njit(cache=True, fastmath=False)
-def in_scattering(mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data, sm_tint, geo, x, y, z, dx, dy, dz,
-                  light_extinction, leg_steps):
-    """``(S_r, S_g, S_b, σt)`` at world point ``x`` seen along unit direction ``d`` (module docstring, pass 1)."""
+def in_scattering(medium, lights, shadows, geo, x, y, z, dx, dy, dz, light_extinction, leg_steps):
+    """``(S_r, S_g, S_b, σt)`` at world point ``x`` seen along unit direction ``d`` (module docstring, pass 1).
+
+    ``medium``, ``lights``, ``shadows``: the packed records of :mod:`vlref.medium`, :mod:`vlref.lights.pack`
+    and :mod:`vlref.lights.shadowmaps`."""
+    mp, lattice = medium.params, medium.noise
+    li, lf = lights.ints, lights.floats
     rho = density(mp, lattice, x, y, z)
     ss, st = mp[M_SS] * rho, mp[M_ST] * rho
     sr, sg, sb = 0.0, 0.0, 0.0
     if ss == 0.0:
         return sr, sg, sb, st
     for k in range(li.shape[0]):
-        lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
+        lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
         if er + eg + eb == 0.0:
             continue
         kind = li[k, I_KIND]
-        vr, vg, vb = shadow_visibility(sm_i, sm_f, sm_data, sm_tint, geo, kind, lf, k, x, y, z)
+        vr, vg, vb = shadow_visibility(shadows, geo, kind, lf, k, x, y, z)
         tl = 1.0
-        if light_extinction and mp[M_ST] != 0.0 and not (kind == 2 and mp[M_BOUNDED] == 0.0):
+        if light_extinction and mp[M_ST] != 0.0 and not (kind == KIND_DIRECTIONAL and mp[M_BOUNDED] == 0.0):
             tl = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, 0.0, dist, leg_steps))
         f = ss * hg(dx * lx + dy * ly + dz * lz, mp[M_G]) * tl
         sr += f * er * vr
@@ -65,8 +69,8 @@ def in_scattering(mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data, sm_tin
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def froxel_scatter(origin, dirs, forward, bounds, xi_z, mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data,
-                   sm_tint, geo, light_extinction, leg_steps, out):
+def froxel_scatter(origin, dirs, forward, bounds, xi_z, medium, lights, shadows, geo, light_extinction, leg_steps,
+                   out):
     """Fill ``out`` (gh, gw, D, 4) with ``(S, σt)`` per froxel (pass 1).
 
     ``dirs`` (gh, gw, 3): unit rays through the jittered sample uv of every column; ``bounds`` (D+1,)
@@ -79,9 +83,8 @@ def froxel_scatter(origin, dirs, forward, bounds, xi_z, mp, lattice, li, lf, coo
         inv_cos = 1.0 / (dx * forward[0] + dy * forward[1] + dz * forward[2])
         for k in range(d):
             t = (bounds[k] + xi_z * (bounds[k + 1] - bounds[k])) * inv_cos
-            s0, s1, s2, st = in_scattering(mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data, sm_tint, geo,
-                                           origin[0] + t * dx, origin[1] + t * dy, origin[2] + t * dz, dx, dy, dz,
-                                           light_extinction, leg_steps)
+            s0, s1, s2, st = in_scattering(medium, lights, shadows, geo, origin[0] + t * dx, origin[1] + t * dy,
+                                           origin[2] + t * dz, dx, dy, dz, light_extinction, leg_steps)
             out[r, c, k, 0], out[r, c, k, 1], out[r, c, k, 2], out[r, c, k, 3] = s0, s1, s2, st
 
 

@@ -317,9 +317,9 @@ def next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz
 
 
 @njit(cache=True, fastmath=False)
-def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only,
-                ox, oy, oz, dx, dy, dz, tmin, tmax):
-    """Closest triangle hit in ``(tmin, tmax)``: ``(t, i)`` (``i`` in packed order) or ``(inf, -1)``.
+def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only, ray, tmin, tmax):
+    """Closest triangle hit in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``: ``(t, i)`` (``i`` in
+    packed order) or ``(inf, -1)``.
 
     With ``opaque_only`` the triangles whose ``opaque[i]`` is false are skipped.
 
@@ -328,6 +328,7 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
     """
     if node_first.shape[0] == 0:
         return INF, -1
+    ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     best, found = tmax, -1
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
@@ -365,9 +366,10 @@ def _seen(hit_obj, hit_t, n, obj, t):
 
 
 @njit(cache=True, fastmath=False)
-def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tri_obj, opacity, tint,
-                      ox, oy, oz, dx, dy, dz, tmin, tmax):
-    """Product of ``(1 - opacity) * tint`` over triangles crossed in ``(tmin, tmax)``; 0 at the first opaque one.
+def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tri_obj, opacity, tint, ray, tmin,
+                      tmax):
+    """Product of ``(1 - opacity) * tint`` over triangles crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx,
+    dy, dz)``; 0 at the first opaque one.
 
     All-hit traversal (any order) with an early exit on an opaque triangle (``opacity == 1``).
     A ray through an edge shared by two triangles of one object reports both; a crossing of
@@ -377,6 +379,7 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
     tr, tg, tb = 1.0, 1.0, 1.0
     if node_first.shape[0] == 0:
         return tr, tg, tb
+    ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     stack = np.empty(STACK, dtype=np.int64)
     hit_obj = np.empty(DEDUP, dtype=np.int64)

@@ -47,9 +47,10 @@ def build_primitive_bvh(box_min: np.ndarray, box_max: np.ndarray) -> Bvh:
 
 
 @njit(cache=True, fastmath=False)
-def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, ox, oy, oz, dx, dy, dz,
-                  tmin, tmax, best, best_k, nx, ny, nz):
-    """Merge the closest primitive hit into ``(best, best_k, nx, ny, nz)`` and return the updated tuple.
+def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, best, best_k,
+                  nx, ny, nz):
+    """Merge the closest primitive hit of ``ray = (ox, oy, oz, dx, dy, dz)`` into ``(best, best_k, nx, ny, nz)``
+    and return the updated tuple.
 
     ``(best, best_k)`` is the best hit so far (``best = tmax``, ``best_k = -1`` when none), ``best_k``
     a primitive index; a hit replaces it when ``(t, k) < (best, best_k)`` lexicographically.
@@ -58,6 +59,7 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
     """
     if node_first.shape[0] == 0:
         return best, best_k, nx, ny, nz
+    ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
         return best, best_k, nx, ny, nz
@@ -83,11 +85,12 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
 
 
 @njit(cache=True, fastmath=False)
-def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ox, oy, oz, dx, dy, dz,
-                   tmin, tmax):
-    """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` (any-hit traversal, early exit)."""
+def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax):
+    """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``
+    (any-hit traversal, early exit)."""
     if node_first.shape[0] == 0:
         return False
+    ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) == INF:
         return False

@@ -194,12 +194,13 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
         t, ax, ay, az = hit_primitive(kind[k], row[k], ox, oy, oz, dx, dy, dz, tmin, best)
         if t < best:
             best, best_k, nx, ny, nz = t, k, ax, ay, az
+    ray = (ox, oy, oz, dx, dy, dz)
     best, best_k, nx, ny, nz = prims_closest(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count,
-                                             geo.pnode_prims, geo.prim_kind, geo.prim_row, ox, oy, oz, dx, dy, dz,
-                                             tmin, tmax, best, best_k, nx, ny, nz)
+                                             geo.pnode_prims, geo.prim_kind, geo.prim_row, ray, tmin, tmax, best,
+                                             best_k, nx, ny, nz)
     obj = geo.prim_obj[best_k] if best_k >= 0 else -1
     t, i = bvh_closest(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2,
-                       geo.tri_opaque, opaque_only, ox, oy, oz, dx, dy, dz, tmin, best)
+                       geo.tri_opaque, opaque_only, ray, tmin, best)
     if i >= 0:
         best, obj = t, geo.tri_obj[i]
         nx, ny, nz = triangle_normal(geo.e1, geo.e2, i)
@@ -221,8 +222,9 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
     if norm == 0.0:
         return 1.0, 1.0, 1.0
     tmin = SHADOW_EPS / norm
+    ray = (ox, oy, oz, dx, dy, dz)
     if prims_occluded(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims,
-                      geo.prim_kind, geo.prim_row, ox, oy, oz, dx, dy, dz, tmin, tmax):
+                      geo.prim_kind, geo.prim_row, ray, tmin, tmax):
         return 0.0, 0.0, 0.0
     lin, kind, row, prim_obj, opacity, tint = (geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity,
                                                geo.tint)
@@ -242,7 +244,7 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
             tg *= clear * tint[o, 1]
             tb *= clear * tint[o, 2]
     mr, mg, mb = bvh_transmittance(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1,
-                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ox, oy, oz, dx, dy, dz, tmin, tmax)
+                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax)
     return tr * mr, tg * mg, tb * mb
 
 

@@ -22,7 +22,7 @@ means "use the documented folk formula".
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from ..camera import look_rotation
@@ -30,9 +30,11 @@ from .attenuation import ATTENUATION_CODES
 from .cone import CONE_CODES, default_inner_angle
 from .cookies import load_cookie, FILTER_CODES, WRAP_CODES
 
-__all__ = ["PackedLights", "pack_lights", "KIND_CODES"]
+__all__ = ["PackedLights", "pack_lights", "KIND_CODES", "KIND_POINT", "KIND_SPOT", "KIND_DIRECTIONAL"]
 
-KIND_CODES = {"point": 0, "spot": 1, "directional": 2}
+KIND_POINT, KIND_SPOT, KIND_DIRECTIONAL = 0, 1, 2
+"""Light kinds, column ``I_KIND`` of the int table."""
+KIND_CODES = {"point": KIND_POINT, "spot": KIND_SPOT, "directional": KIND_DIRECTIONAL}
 
 I_KIND, I_ATT, I_CONE, I_CK_OFF, I_CK_W, I_CK_H, I_CK_WRAP, I_CK_FILTER = range(8)
 NI = 8
@@ -42,9 +44,8 @@ NI = 8
 NF = 25
 
 
-@dataclass(frozen=True)
-class PackedLights:
-    """Lights as arrays (see the module docstring for the columns).
+class PackedLights(NamedTuple):
+    """Lights as arrays (see the module docstring for the columns): the light record the njit kernels take.
 
     ints : (n, NI) int64.  floats : (n, NF) float.  cookies : (m, 3) float texels.
     lut : (h, w) Unity distance LUT, or shape (0, 0) for the folk formula.

@@ -32,7 +32,7 @@ from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
 from .pack import (F_CB, F_CG, F_CK_SIZE, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER,
                    F_HALF_OUTER, F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B,
                    F_UX, F_UY, F_UZ, I_ATT, I_CK_FILTER, I_CK_H, I_CK_OFF, I_CK_W, I_CK_WRAP, I_CONE, I_KIND,
-                   PackedLights)
+                   KIND_DIRECTIONAL, KIND_SPOT, PackedLights)
 
 __all__ = ["light_incidence", "scene_colour", "SURFACE_OFFSET"]
 
@@ -40,14 +40,16 @@ SURFACE_OFFSET = 1e-4
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
-def light_incidence(li, lf, cookies, lut, k, x, y, z):
-    """``(lx, ly, lz, dist, er, eg, eb)`` of light ``k`` at ``(x, y, z)`` (module docstring).
+def light_incidence(lights, k, x, y, z):
+    """``(lx, ly, lz, dist, er, eg, eb)`` of light ``k`` of ``lights`` (:class:`~vlref.lights.pack.PackedLights`)
+    at ``(x, y, z)`` (module docstring).
 
-    Works in the float type of ``lf`` and of the point. ``E = 0`` outside the light's volume.
+    Works in the float type of ``lights.floats`` and of the point. ``E = 0`` outside the light's volume.
     """
+    li, lf, cookies, lut = lights.ints, lights.floats, lights.cookies, lights.lut
     zero = cast(x, 0.0)
     kind = li[k, I_KIND]
-    if kind == 2:
+    if kind == KIND_DIRECTIONAL:
         lx, ly, lz = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
         e = cast(x, 1.0)
         dist = cast(x, np.inf)
@@ -59,7 +61,7 @@ def light_incidence(li, lf, cookies, lut, k, x, y, z):
             return zero, zero, zero, zero, zero, zero, zero
         dist = math.sqrt(d2)
         lx, ly, lz = wx / dist, wy / dist, wz / dist
-        if kind == 1:
+        if kind == KIND_SPOT:
             cos_t = -(lx * lf[k, F_DX] + ly * lf[k, F_DY] + lz * lf[k, F_DZ])
             e *= cone_falloff(li[k, I_CONE], cos_t, lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_HALF_OUTER],
                               lf[k, F_HALF_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B])
@@ -70,7 +72,7 @@ def light_incidence(li, lf, cookies, lut, k, x, y, z):
         rx, ry, rz = x - lf[k, F_PX], y - lf[k, F_PY], z - lf[k, F_PZ]
         xl = rx * lf[k, F_RX] + ry * lf[k, F_RY] + rz * lf[k, F_RZ]
         yl = rx * lf[k, F_UX] + ry * lf[k, F_UY] + rz * lf[k, F_UZ]
-        if kind == 1:
+        if kind == KIND_SPOT:
             zl = rx * lf[k, F_DX] + ry * lf[k, F_DY] + rz * lf[k, F_DZ]
             u, v = spot_cookie_uv(xl, yl, zl, lf[k, F_TAN_HALF])
         else:
@@ -82,7 +84,7 @@ def light_incidence(li, lf, cookies, lut, k, x, y, z):
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _shade(geo, li, lf, cookies, lut, position, normal, albedo, emission, hit, ambient, sky, out):
+def _shade(geo, lights, position, normal, albedo, emission, hit, ambient, sky, out):
     h, w = hit.shape
     inv_pi = 1.0 / math.pi
     for p in prange(h * w):
@@ -95,8 +97,8 @@ def _shade(geo, li, lf, cookies, lut, position, normal, albedo, emission, hit, a
         y = position[i, j, 1] + SURFACE_OFFSET * ny
         z = position[i, j, 2] + SURFACE_OFFSET * nz
         sr, sg, sb = 0.0, 0.0, 0.0
-        for k in range(li.shape[0]):
-            lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
+        for k in range(lights.ints.shape[0]):
+            lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
             cos_n = nx * lx + ny * ly + nz * lz
             if cos_n <= 0.0 or er + eg + eb == 0.0:
                 continue
@@ -112,8 +114,7 @@ def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
     out = np.empty(gbuffer.albedo.shape)
-    _shade(geometry.arrays, lights.ints, lights.floats, lights.cookies, lights.lut, gbuffer.position, gbuffer.normal,
-           gbuffer.albedo, gbuffer.emission, gbuffer.object_id >= 0,
-           np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),
-           out)
+    _shade(geometry.arrays, lights, gbuffer.position, gbuffer.normal, gbuffer.albedo, gbuffer.emission,
+           gbuffer.object_id >= 0, np.asarray(scene.render.ambient, dtype=np.float64),
+           np.asarray(scene.render.sky_color, dtype=np.float64), out)
     return out

@@ -32,7 +32,7 @@ Filters: ``hard`` = the texel containing the sample (nearest); ``pcf`` = the fou
 ``(u·res - 0.5, v·res - 0.5)``, each compared, blended with bilinear weights (a GPU's 2x2 comparison
 sampler), addresses clamped to the face/map; ``exact`` = a shadow ray through the geometry
 (:func:`vlref.geometry.shadow_transmittance`, no map). Visibility ``V = 1 - strength · (1 - lit)``
-per RGB channel.
+per RGB channel (:func:`apply_strength`).
 
 Transparent occluders (``opacity < 1``): when the scene has any, each map gets a second layer per
 texel: the biased distance to the first transparent surface in front of the first opaque one
@@ -46,6 +46,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -53,10 +54,10 @@ from numba import njit, prange
 from ..camera import Camera
 from ..geometry import closest_hit, shadow_transmittance
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
-                   PackedLights)
+                   KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
-__all__ = ["ShadowMaps", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "shadow_visibility", "cascade_splits",
-           "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+__all__ = ["ShadowMaps", "ShadowTable", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "apply_strength",
+           "shadow_visibility", "cascade_splits", "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
@@ -74,6 +75,15 @@ NSI = 4
 S_STRENGTH = 0
 S_CASC = 1  # then (cx, cy, cz, radius, back) per cascade
 NSF = 1 + 5 * MAX_CASCADES
+
+
+class ShadowTable(NamedTuple):
+    """The shadow record the njit kernels take: the array fields of :class:`ShadowMaps` (same meanings)."""
+
+    ints: np.ndarray
+    floats: np.ndarray
+    data: np.ndarray
+    tint: np.ndarray
 
 
 @dataclass
@@ -114,6 +124,11 @@ class ShadowMaps:
         the distance from the map's near plane to the centre (metres)."""
         c = self.floats[light, S_CASC + 5 * k:S_CASC + 5 * k + 5]
         return c[:3], float(c[3]), float(c[4])
+
+    @property
+    def table(self) -> ShadowTable:
+        """The arrays as the record the njit kernels take."""
+        return ShadowTable(self.ints, self.floats, self.data, self.tint)
 
     def buffers(self) -> dict[str, np.ndarray]:
         """Every map as a named (res, res) float32 buffer, plus ``<name>_transparent_distance`` (res, res)
@@ -253,10 +268,10 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
         res = sh.resolution
         faces = []  # (name, origins, dirs, start, tmax)
         kind = int(packed.ints[i, I_KIND])
-        if kind == 1:
+        if kind == KIND_SPOT:
             o, d, s = _perspective(pos, right, up, fwd, lf[F_TAN_HALF], sh.near, res)
             faces.append((f"shadow_spot_{i}", o, d, s, np.maximum(light.range - s, 0.0)))
-        elif kind == 0:
+        elif kind == KIND_POINT:
             for f, (suffix, r, u, w) in enumerate(CUBE_FACES):
                 o, d, s = _perspective(pos, _CUBE[f, 0], _CUBE[f, 1], _CUBE[f, 2], 1.0, sh.near, res)
                 faces.append((f"shadow_point_{i}_face_{suffix}", o, d, s, np.maximum(light.range - s, 0.0)))
@@ -337,14 +352,18 @@ def _cube_face(wx, wy, wz):
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
-def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
-    """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64)."""
+def map_lit(shadows, kind, lf, light, x, y, z):
+    """Unfiltered-strength lit fraction (r, g, b) of world point ``x`` from light ``light``'s map (float64).
+
+    ``shadows`` a :class:`ShadowTable`, ``lf`` the light float table of :mod:`vlref.lights.pack`.
+    """
+    sm_i, sm_f, data, tint = shadows.ints, shadows.floats, shadows.data, shadows.tint
     res = sm_i[light, S_RES]
     base = sm_i[light, S_OFFSET]
     tbase = base if tint.shape[0] > 0 else -1
     pcf = sm_i[light, S_MODE] == SHADOW_PCF
     wx, wy, wz = x - float(lf[light, F_PX]), y - float(lf[light, F_PY]), z - float(lf[light, F_PZ])
-    if kind == 2:
+    if kind == KIND_DIRECTIONAL:
         for k in range(sm_i[light, S_CASCADES]):
             j = S_CASC + 5 * k
             cx, cy, cz = x - sm_f[light, j], y - sm_f[light, j + 1], z - sm_f[light, j + 2]
@@ -360,7 +379,7 @@ def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
                 return _sample_map(data, tint, o, to, res, pcf, u, v, zl + sm_f[light, j + 4])
         return 1.0, 1.0, 1.0
     d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
-    if kind == 1:
+    if kind == KIND_SPOT:
         xl = wx * lf[light, F_RX] + wy * lf[light, F_RY] + wz * lf[light, F_RZ]
         yl = wx * lf[light, F_UX] + wy * lf[light, F_UY] + wz * lf[light, F_UZ]
         zl = wx * lf[light, F_DX] + wy * lf[light, F_DY] + wz * lf[light, F_DZ]
@@ -385,7 +404,7 @@ def map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z):
 def exact_visibility(geo, kind, lf, light, x, y, z):
     """Unfiltered-strength RGB transmittance of a shadow ray from world point ``x`` toward light ``light``
     (to infinity for directional lights; 1 at the light's own position)."""
-    if kind == 2:
+    if kind == KIND_DIRECTIONAL:
         return shadow_transmittance(geo, x, y, z, -float(lf[light, F_DX]), -float(lf[light, F_DY]),
                                     -float(lf[light, F_DZ]), np.inf)
     wx, wy, wz = float(lf[light, F_PX]) - x, float(lf[light, F_PY]) - y, float(lf[light, F_PZ]) - z
@@ -396,18 +415,24 @@ def exact_visibility(geo, kind, lf, light, x, y, z):
 
 
 @njit(cache=True, fastmath=False)
-def shadow_visibility(sm_i, sm_f, data, tint, geo, kind, lf, light, x, y, z):
+def apply_strength(strength, r, g, b):
+    """Visibility ``V = 1 - strength · (1 - lit)`` per channel of the lit fraction ``(r, g, b)`` (the
+    light's ``shadows.strength``; float64, as every caller evaluates it)."""
+    return 1.0 - strength * (1.0 - r), 1.0 - strength * (1.0 - g), 1.0 - strength * (1.0 - b)
+
+
+@njit(cache=True, fastmath=False)
+def shadow_visibility(shadows, geo, kind, lf, light, x, y, z):
     """Visibility (r, g, b) in [0, 1] of light ``light`` from world point ``x`` (float64), strength applied.
 
-    Mode ``SHADOW_EXACT`` traces a shadow ray toward the light (:func:`exact_visibility`); the map modes
-    are :func:`map_lit`.
+    ``shadows`` a :class:`ShadowTable`. Mode ``SHADOW_EXACT`` traces a shadow ray toward the light
+    (:func:`exact_visibility`); the map modes are :func:`map_lit`.
     """
-    mode = sm_i[light, S_MODE]
+    mode = shadows.ints[light, S_MODE]
     if mode == SHADOW_NONE:
         return 1.0, 1.0, 1.0
     if mode == SHADOW_EXACT:
         r, g, b = exact_visibility(geo, kind, lf, light, x, y, z)
     else:
-        r, g, b = map_lit(sm_i, sm_f, data, tint, kind, lf, light, x, y, z)
-    s = sm_f[light, S_STRENGTH]
-    return 1.0 - s * (1.0 - r), 1.0 - s * (1.0 - g), 1.0 - s * (1.0 - b)
+        r, g, b = map_lit(shadows, kind, lf, light, x, y, z)
+    return apply_strength(shadows.floats[light, S_STRENGTH], r, g, b)

@@ -24,9 +24,9 @@ from numba import njit, prange
 
 from ..lights.shading import light_incidence
 from ..lights.shadowmaps import shadow_visibility
-from ..lights.pack import F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND
-from ..medium import M_SS, M_ST, density, optical_depth
-from .segments import cone_segment, sphere_segment
+from ..lights.pack import I_KIND
+from ..medium import M_G, M_SS, M_ST, density, optical_depth
+from .segments import light_segment
 from ..phase import hg
 
 __all__ = ["kz_march", "kz_segments", "view_transmittance", "KZ_OPTICAL_DEPTH_SUBSTEPS"]
@@ -36,13 +36,17 @@ KZ_OPTICAL_DEPTH_SUBSTEPS = 64
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def kz_march(cam, dirs, seg_a, seg_b, beta, n_steps, li, lf, cookies, lut, light, mp, lattice, g, transmittance,
-             sm_i, sm_f, sm_data, sm_tint, geo):
+def kz_march(cam, dirs, seg_a, seg_b, beta, n_steps, light, lights, medium, shadows, geo, transmittance):
     """In-scattered RGB (h, w, 3) of light ``light`` over a march target (module docstring), prange over pixels.
 
     cam (3,); dirs (h, w, 3) unit rays; seg_a, seg_b (h, w) the segment (empty when ``b <= a``);
-    beta (h, w) offsets in [0, 1); ``mp, lattice`` the packed medium; ``sm_*`` the shadow maps.
+    beta (h, w) offsets in [0, 1); ``lights``, ``medium`` (its anisotropy ``g`` included) and ``shadows``
+    the packed records (:mod:`vlref.lights.pack`, :mod:`vlref.medium`, :mod:`vlref.lights.shadowmaps`).
     """
+    mp, lattice = medium.params, medium.noise
+    lf = lights.floats
+    kind = lights.ints[light, I_KIND]
+    g = mp[M_G]
     h, w = seg_a.shape
     out = np.zeros((h, w, 3))
     for p in prange(h * w):
@@ -61,9 +65,9 @@ def kz_march(cam, dirs, seg_a, seg_b, beta, n_steps, li, lf, cookies, lut, light
         for i in range(n_steps):
             x, y, z = cam[0] + t * dx, cam[1] + t * dy, cam[2] + t * dz
             rho = density(mp, lattice, x, y, z)
-            lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, light, x, y, z)
+            lx, ly, lz, dist, er, eg, eb = light_incidence(lights, light, x, y, z)
             if rho > 0.0 and (er > 0.0 or eg > 0.0 or eb > 0.0):
-                vr, vg, vb = shadow_visibility(sm_i, sm_f, sm_data, sm_tint, geo, li[light, I_KIND], lf, light, x, y, z)
+                vr, vg, vb = shadow_visibility(shadows, geo, kind, lf, light, x, y, z)
                 k = trans * mp[M_SS] * rho * hg(dx * lx + dy * ly + dz * lz, g) * step
                 acc_r += k * er * vr
                 acc_g += k * eg * vg
@@ -76,33 +80,27 @@ def kz_march(cam, dirs, seg_a, seg_b, beta, n_steps, li, lf, cookies, lut, light
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def kz_segments(cam, dirs, t_end, kind, lf, light):
+def kz_segments(cam, dirs, t_end, lights, light):
     """The part ``[a, b]`` of each ray ``[0, t_end]`` inside light ``light``'s volume, prange over pixels.
 
-    Point: the ball of radius ``range``; spot: that ball cut by the cone of half-angle ``spot_angle/2``
-    (:func:`~vlref.march.segments.cone_segment`); directional: the whole ray (the full-screen quad).
+    Point: the ball of radius ``range``; spot: that ball cut by the cone of half-angle ``spot_angle/2``;
+    directional: the whole ray (the full-screen quad): :func:`~vlref.march.segments.light_segment`.
     """
     h, w = t_end.shape
     a_out, b_out = np.zeros((h, w)), np.zeros((h, w))
     for p in prange(h * w):
         r, c = p // w, p % w
-        dx, dy, dz = dirs[r, c, 0], dirs[r, c, 1], dirs[r, c, 2]
-        if kind == 2:
-            a, b = 0.0, t_end[r, c]
-        elif kind == 0:
-            a, b = sphere_segment(lf[light, F_PX], lf[light, F_PY], lf[light, F_PZ], lf[light, F_RANGE],
-                                  cam[0], cam[1], cam[2], dx, dy, dz, 0.0, t_end[r, c])
-        else:
-            a, b = cone_segment(lf[light, F_PX], lf[light, F_PY], lf[light, F_PZ], lf[light, F_DX], lf[light, F_DY],
-                                lf[light, F_DZ], lf[light, F_COS_OUTER], lf[light, F_RANGE], cam[0], cam[1], cam[2],
-                                dx, dy, dz, 0.0, t_end[r, c])
+        a, b = light_segment(lights, light, cam[0], cam[1], cam[2], dirs[r, c, 0], dirs[r, c, 1], dirs[r, c, 2],
+                             t_end[r, c])
         a_out[r, c], b_out[r, c] = a, b
     return a_out, b_out
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def view_transmittance(cam, dirs, t_end, mp, lattice):
-    """``exp(-τ(0, t_end))`` per pixel (:func:`vlref.medium.optical_depth`), prange over pixels."""
+def view_transmittance(cam, dirs, t_end, medium):
+    """``exp(-τ(0, t_end))`` per pixel (:func:`vlref.medium.optical_depth` of the :class:`~vlref.medium.PackedMedium`
+    ``medium``), prange over pixels."""
+    mp, lattice = medium.params, medium.noise
     h, w = t_end.shape
     out = np.ones((h, w))
     for p in prange(h * w):

@@ -57,34 +57,22 @@ import math
 from numba import njit, prange
 
 from ..numeric import cast
-from ..lights.pack import (F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND)
+from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shading import light_incidence
-from ..lights.shadowmaps import SHADOW_EXACT, SHADOW_NONE, S_MODE, S_STRENGTH, exact_visibility, map_lit
+from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, S_MODE, S_STRENGTH, apply_strength, exact_visibility,
+                                 map_lit)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_FOG, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, clip_to_bounds,
                       density, fog_depth_ratio, fog_exponent, in_bounds, optical_depth)
 from ..phase import hg
-from .segments import cone_segment, sphere_segment
+from .segments import light_segment
 
-__all__ = ["march_physical", "light_segment"]
-
-
-@njit(cache=True, fastmath=False)
-def light_segment(li, lf, k, ox, oy, oz, dx, dy, dz, t_end):
-    """``(a, b)`` of light ``k`` on ``[0, t_end]`` (empty when ``b <= a``)."""
-    zero = cast(ox, 0.0)
-    kind = li[k, I_KIND]
-    if kind == 2:
-        return zero, t_end
-    if kind == 0:
-        return sphere_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz,
-                              zero, t_end)
-    return cone_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ],
-                        lf[k, F_COS_OUTER], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz, zero, t_end)
+__all__ = ["march_physical"]
 
 
 @njit(cache=True, fastmath=False)
-def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data,
-                 sm_tint, geo, k, light_extinction, leg_steps):
+def _march_light(origin, dx, dy, dz, a, b, beta, steps, medium, lights, shadows, geo, k, light_extinction,
+                 leg_steps):
+    mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero = cast(ox, 0.0)
     one = cast(ox, 1.0)
@@ -92,14 +80,15 @@ def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, coo
     ss0, st0, g = mp[M_SS], mp[M_ST], mp[M_G]
     if ss0 == zero:  # nothing scatters
         return lr, lg, lb
-    kind = li[k, I_KIND]
-    mode = sm_i[k, S_MODE]
-    strength = sm_f[k, S_STRENGTH]
+    lf = lights.floats
+    kind = lights.ints[k, I_KIND]
+    mode = shadows.ints[k, S_MODE]
+    strength = shadows.floats[k, S_STRENGTH]
     fog, noise = mp[M_FOG] != zero, mp[M_NOISE] != zero
-    leg = light_extinction and st0 != zero and not (kind == 2 and mp[M_BOUNDED] == zero)
+    leg = light_extinction and st0 != zero and not (kind == KIND_DIRECTIONAL and mp[M_BOUNDED] == zero)
     # leg of a point/spot light in an unbounded noiseless fog: the closed form of optical_depth with the
     # sample's own fog factor e^{e_a} reused when it is the larger end (same operations, same bits)
-    leg_fog = leg and fog and not noise and mp[M_BOUNDED] == zero and kind != 2
+    leg_fog = leg and fog and not noise and mp[M_BOUNDED] == zero and kind != KIND_DIRECTIONAL
     trans = math.exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
     delta = (b - a) / cast(ox, steps)
     st_prev, em1 = zero, zero  # em1 = expm1(-st_prev * delta), reused while st is unchanged
@@ -130,17 +119,16 @@ def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, coo
             em1 = math.expm1(-st * delta)
             st_prev = st
         if ss > zero:
-            lx, ly, lz, dist, er, eg, eb = light_incidence(li, lf, cookies, lut, k, x, y, z)
+            lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
             if er + eg + eb > zero:
                 vr, vg, vb = one, one, one
                 if mode == SHADOW_EXACT:
                     fr, fg, fb = exact_visibility(geo, kind, lf, k, float(x), float(y), float(z))
                 elif mode != SHADOW_NONE:
-                    fr, fg, fb = map_lit(sm_i, sm_f, sm_data, sm_tint, kind, lf, k, float(x), float(y), float(z))
+                    fr, fg, fb = map_lit(shadows, kind, lf, k, float(x), float(y), float(z))
                 if mode != SHADOW_NONE:
-                    vr = cast(ox, 1.0 - strength * (1.0 - fr))
-                    vg = cast(ox, 1.0 - strength * (1.0 - fg))
-                    vb = cast(ox, 1.0 - strength * (1.0 - fb))
+                    fr, fg, fb = apply_strength(strength, fr, fg, fb)
+                    vr, vg, vb = cast(ox, fr), cast(ox, fg), cast(ox, fb)
                 tl = one
                 if leg_fog:
                     el = fog_exponent(mp, y + dist * ly)
@@ -159,16 +147,18 @@ def _march_light(origin, dx, dy, dz, a, b, beta, steps, mp, lattice, li, lf, coo
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def march_physical(origin, dirs, t_end, offsets, steps, mp, lattice, li, lf, cookies, lut, sm_i, sm_f, sm_data,
-                   sm_tint, geo, light_extinction, leg_steps, per_light, transmittance):
+def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
+                   per_light, transmittance):
     """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
-    type, like the medium ``mp``/``lattice`` and the light floats ``lf``/``lut``. Shadow tables are
-    :class:`vlref.lights.shadowmaps.ShadowMaps` fields; ``geo`` the geometry tuple (exact shadows).
+    type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
+    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
+    ``geo`` the geometry tuple (exact shadows).
     """
+    mp, lattice = medium.params, medium.noise
     h, w = t_end.shape
-    n = li.shape[0]
+    n = lights.ints.shape[0]
     for p in prange(h * w):
         i, j = p // w, p % w
         dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
@@ -176,12 +166,12 @@ def march_physical(origin, dirs, t_end, offsets, steps, mp, lattice, li, lf, coo
         transmittance[i, j] = math.exp(-optical_depth(mp, lattice, origin[0], origin[1], origin[2], dx, dy, dz,
                                                       cast(te, 0.0), te, steps))
         for k in range(n):
-            a, b = light_segment(li, lf, k, origin[0], origin[1], origin[2], dx, dy, dz, te)
+            a, b = light_segment(lights, k, origin[0], origin[1], origin[2], dx, dy, dz, te)
             if b > a:
                 a, b = clip_to_bounds(mp, origin[0], origin[1], origin[2], dx, dy, dz, a, b)
             if b <= a:
                 per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = cast(te, 0.0)
                 continue
-            r, g, bl = _march_light(origin, dx, dy, dz, a, b, offsets[i, j], steps, mp, lattice, li, lf, cookies,
-                                    lut, sm_i, sm_f, sm_data, sm_tint, geo, k, light_extinction, leg_steps)
+            r, g, bl = _march_light(origin, dx, dy, dz, a, b, offsets[i, j], steps, medium, lights, shadows, geo, k,
+                                    light_extinction, leg_steps)
             per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = r, g, bl

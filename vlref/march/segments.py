@@ -16,17 +16,22 @@ the segment is empty when ``b <= a`` (then ``(t0, t0)`` is returned).
   cone's surface (``A = 0``) and a camera inside the cone; root round-off only moves the boundary,
   where every cone law is 0 anyway.
 * directional light: the whole ``[t0, t1]``.
+
+:func:`light_segment` picks the one of these that a packed light's kind needs; :func:`volume_intervals`
+maps the ball or the cone over an image of rays.
 """
 
 from __future__ import annotations
 
 import math
 
-from numba import njit
+import numpy as np
+from numba import njit, prange
 
+from ..lights.pack import F_COS_OUTER, F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RANGE, I_KIND, KIND_DIRECTIONAL, KIND_POINT
 from ..numeric import cast
 
-__all__ = ["sphere_segment", "cone_segment", "inside_cone"]
+__all__ = ["sphere_segment", "cone_segment", "inside_cone", "light_segment", "volume_intervals"]
 
 
 @njit(cache=True, fastmath=False)
@@ -107,3 +112,40 @@ def cone_segment(px, py, pz, ax, ay, az, cos_half, radius, ox, oy, oz, dx, dy, d
     if last <= first:
         return t0, t0
     return first, last
+
+
+@njit(cache=True, fastmath=False)
+def light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end):
+    """``(a, b)`` of light ``k`` of ``lights`` (:class:`~vlref.lights.pack.PackedLights`) on ``[0, t_end]``
+    (empty when ``b <= a``): :mod:`vlref.march.segments` by the light's kind."""
+    lf = lights.floats
+    zero = cast(ox, 0.0)
+    kind = lights.ints[k, I_KIND]
+    if kind == KIND_DIRECTIONAL:
+        return zero, t_end
+    if kind == KIND_POINT:
+        return sphere_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz,
+                              zero, t_end)
+    return cone_segment(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ],
+                        lf[k, F_COS_OUTER], lf[k, F_RANGE], ox, oy, oz, dx, dy, dz, zero, t_end)
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def volume_intervals(cam, dirs, centre, axis, cos_half, radius, cone, t0, t1):
+    """``(enter, leave)`` (h, w) of the rays ``cam + t dirs[r, c]`` on ``[t0, t1]`` through the ball
+    (``cone`` false: :func:`sphere_segment`) or the ball ∩ forward cone (:func:`cone_segment`) of apex
+    ``centre`` (3,), unit ``axis`` (3,) and ``cos_half``; ``(inf, -inf)`` where the ray misses it.
+    prange over pixels."""
+    h, w = dirs.shape[0], dirs.shape[1]
+    enter, leave = np.full((h, w), np.inf), np.full((h, w), -np.inf)
+    for p in prange(h * w):
+        r, c = p // w, p % w
+        dx, dy, dz = dirs[r, c, 0], dirs[r, c, 1], dirs[r, c, 2]
+        if cone:
+            a, b = cone_segment(centre[0], centre[1], centre[2], axis[0], axis[1], axis[2], cos_half, radius,
+                                cam[0], cam[1], cam[2], dx, dy, dz, t0, t1)
+        else:
+            a, b = sphere_segment(centre[0], centre[1], centre[2], radius, cam[0], cam[1], cam[2], dx, dy, dz, t0, t1)
+        if b > a:
+            enter[r, c], leave[r, c] = a, b
+    return enter, leave

@@ -19,6 +19,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from ..lights.pack import KIND_DIRECTIONAL
 from ..lights.shadowmaps import shadow_visibility
 from ..phase import hg
 
@@ -43,11 +44,12 @@ def urp_hash(width: int, height: int, uv_origin: str = "bottom") -> np.ndarray:
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def urp_march(cam, dirs, length, rand, n_steps, jitter, g, sun, sm_i, sm_f, sm_data, sm_tint, geo, lf, light):
+def urp_march(cam, dirs, length, rand, n_steps, jitter, g, sun, shadows, geo, lf, light):
     """The fog ``F`` (h, w) of the module docstring, prange over pixels.
 
     dirs (h, w, 3) unit rays; length (h, w) the clamped ray length ``L``; rand (h, w) the hash;
-    sun (3,) the light's forward vector; ``sm_*``, ``lf``, ``light`` the shadow maps and packed lights.
+    sun (3,) the light's forward vector; ``shadows`` the :class:`~vlref.lights.shadowmaps.ShadowTable`, ``lf``
+    the packed light floats, ``light`` the light's index.
     """
     h, w = length.shape
     out = np.zeros((h, w))
@@ -60,7 +62,7 @@ def urp_march(cam, dirs, length, rand, n_steps, jitter, g, sun, sm_i, sm_f, sm_d
         acc = 0.0
         for i in range(n_steps - 1):
             x, y, z = cam[0] + t * dx, cam[1] + t * dy, cam[2] + t * dz
-            vr, vg, vb = shadow_visibility(sm_i, sm_f, sm_data, sm_tint, geo, 2, lf, light, x, y, z)
+            vr, vg, vb = shadow_visibility(shadows, geo, KIND_DIRECTIONAL, lf, light, x, y, z)
             if (vr + vg + vb) / 3.0 > 0.0:
                 acc += phase
             t += step

@@ -33,6 +33,7 @@ Optical depth of ``x(s) = p + s u`` (``|u| = 1``), ``s ∈ [a, b]``, clipped to 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
@@ -40,8 +41,10 @@ from numba import njit
 from ..geometry import shadow_transmittance
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
+from ..lights.shadowmaps import apply_strength
 from ..medium import (FOG_MAX_EXPONENT, M_FOG, M_FOG_BASE, M_FOG_K, M_G, M_NINT, M_NOFF, M_NOISE, M_NSCALE,
-                      M_NSX, M_NSY, M_NSZ, M_ST, clip_to_bounds, density, noise_value, pack_medium, sigma)
+                      M_NSX, M_NSY, M_NSZ, M_ST, PackedMedium, clip_to_bounds, density, noise_value, pack_medium,
+                      sigma)
 from ..phase import hg
 
 INNER_TOL = 1e-10
@@ -58,39 +61,52 @@ WGK = np.array([0.022935322010529224963732008058970, 0.0630920926299785532907006
 WG = np.array([0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
                0.381830050505118944950369775488975, 0.417959183673469387755102040816327])
 
-# per-light reference flags (float64 columns of ctx[5])
+# per-light reference flags (float64 columns of ReferenceContext.shadows)
 R_SHADOWS, R_STRENGTH = 0, 1
 
 
-def build_context(scene, frame):
-    """The tuple the njit functions read: ``(geo, light ints, light floats, cookies, lut, per-light
-    shadow flags/strength, medium params, noise lattice, light_extinction, bounded)``."""
-    lights = frame.lights
+class ReferenceContext(NamedTuple):
+    """What the reference's njit functions read (everything float64).
+
+    geo : the geometry arrays (exact shadow rays).  lights : :class:`~vlref.lights.pack.PackedLights`.
+    shadows : (n_lights, 2) per-light columns ``R_SHADOWS`` (1.0 when the light casts shadows) and
+    ``R_STRENGTH``.  medium : :class:`~vlref.medium.PackedMedium`.  light_extinction : the light leg
+    ``T_l`` is applied.  bounded : the medium has ``bounds``.
+    """
+
+    geo: tuple
+    lights: lp.PackedLights
+    shadows: np.ndarray
+    medium: PackedMedium
+    light_extinction: bool
+    bounded: bool
+
+
+def build_context(scene, frame) -> ReferenceContext:
+    """The :class:`ReferenceContext` of ``scene``'s ``frame``."""
     med = pack_medium(scene)
     flags = np.zeros((len(scene.lights), 2))
     for i, light in enumerate(scene.lights):
         s = light.shadows
         if s is not None and s.enabled:
             flags[i] = (1.0, s.strength)
-    return (frame.geometry.arrays, lights.ints, np.asarray(lights.floats, dtype=np.float64),
-            np.asarray(lights.cookies, dtype=np.float64), np.asarray(lights.lut, dtype=np.float64), flags,
-            np.asarray(med.params, dtype=np.float64), np.asarray(med.noise, dtype=np.float64),
-            bool(scene.techniques.physical.light_extinction), scene.medium.bounds is not None)
+    return ReferenceContext(frame.geometry.arrays, frame.lights.astype(np.float64), flags, med.astype(np.float64),
+                            bool(scene.techniques.physical.light_extinction), scene.medium.bounds is not None)
 
 
 def max_split_points(ctx, shadow_samples):
     """Capacity of the split-point buffer of one pixel (volumes, medium box, shadow boundaries)."""
-    return 4 + ctx[1].shape[0] * (8 + shadow_samples)
+    return 4 + ctx.lights.ints.shape[0] * (8 + shadow_samples)
 
 
 @njit(cache=True, fastmath=False)
 def light_count(ctx):
-    return ctx[1].shape[0]
+    return ctx.lights.ints.shape[0]
 
 
 @njit(cache=True, fastmath=False)
 def casts_shadows(light, ctx):
-    return ctx[5][light, R_SHADOWS] != 0.0
+    return ctx.shadows[light, R_SHADOWS] != 0.0
 
 
 # ---------------------------------------------------------------------------------------------- optical depth
@@ -278,7 +294,7 @@ def segment_depth(mp, lattice, px, py, pz, ux, uy, uz, a, b):
 @njit(cache=True, fastmath=False)
 def view_optical_depth(ray, a, b, ctx):
     """Optical depth of the camera ray between ``t = a`` and ``t = b``."""
-    return segment_depth(ctx[6], ctx[7], ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], a, b)
+    return segment_depth(ctx.medium.params, ctx.medium.noise, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], a, b)
 
 
 # ---------------------------------------------------------------------------------------------- lights
@@ -287,14 +303,13 @@ def view_optical_depth(ray, a, b, ctx):
 def light_geometry(light, x, y, z, ctx):
     """Unit vector toward the light, distance (inf: directional) and unshadowed ``E_l`` RGB
     (:func:`vlref.lights.shading.light_incidence`, the function the march calls)."""
-    return light_incidence(ctx[1], ctx[2], ctx[3], ctx[4], light, x, y, z)
+    return light_incidence(ctx.lights, light, x, y, z)
 
 
 @njit(cache=True, fastmath=False)
 def _shadow(light, x, y, z, lx, ly, lz, dist, ctx):
-    tr, tg, tb = shadow_transmittance(ctx[0], x, y, z, lx, ly, lz, dist)
-    s = ctx[5][light, R_STRENGTH]
-    return 1.0 - s * (1.0 - tr), 1.0 - s * (1.0 - tg), 1.0 - s * (1.0 - tb)
+    tr, tg, tb = shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist)
+    return apply_strength(ctx.shadows[light, R_STRENGTH], tr, tg, tb)
 
 
 @njit(cache=True, fastmath=False)
@@ -302,7 +317,7 @@ def visibility(light, t, ray, ctx):
     """RGB visibility ``V`` of ``light`` from ``x(t)`` (1 for lights without shadows)."""
     x, y, z = ray[0] + t * ray[3], ray[1] + t * ray[4], ray[2] + t * ray[5]
     lx, ly, lz, dist, er, eg, eb = light_geometry(light, x, y, z, ctx)
-    if ctx[5][light, R_SHADOWS] == 0.0 or (lx == 0.0 and ly == 0.0 and lz == 0.0):
+    if ctx.shadows[light, R_SHADOWS] == 0.0 or (lx == 0.0 and ly == 0.0 and lz == 0.0):
         return 1.0, 1.0, 1.0
     return _shadow(light, x, y, z, lx, ly, lz, dist, ctx)
 
@@ -310,29 +325,29 @@ def visibility(light, t, ray, ctx):
 @njit(cache=True, fastmath=False)
 def light_leg_depth(x, y, z, lx, ly, lz, dist, ctx):
     """Optical depth from ``x`` toward the light (module docstring for directional lights)."""
-    if not ctx[8]:
+    if not ctx.light_extinction:
         return 0.0
-    if dist == np.inf and not ctx[9]:
+    if dist == np.inf and not ctx.bounded:
         return 0.0
     far = dist if dist < np.inf else 1e300
-    return segment_depth(ctx[6], ctx[7], x, y, z, lx, ly, lz, 0.0, far)
+    return segment_depth(ctx.medium.params, ctx.medium.noise, x, y, z, lx, ly, lz, 0.0, far)
 
 
 @njit(cache=True, fastmath=False)
 def inscatter(t, ray, ctx):
     """The integrand ``f(t)`` (RGB radiance per metre) of the module docstring."""
-    mp, lattice = ctx[6], ctx[7]
+    mp, lattice = ctx.medium.params, ctx.medium.noise
     x, y, z = ray[0] + t * ray[3], ray[1] + t * ray[4], ray[2] + t * ray[5]
     s_s, _ = sigma(mp, lattice, x, y, z)
     if s_s == 0.0:
         return 0.0, 0.0, 0.0
     r, g, b = 0.0, 0.0, 0.0
-    for light in range(ctx[1].shape[0]):
+    for light in range(ctx.lights.ints.shape[0]):
         lx, ly, lz, dist, er, eg, eb = light_geometry(light, x, y, z, ctx)
         if er == 0.0 and eg == 0.0 and eb == 0.0:
             continue
         vr, vg, vb = 1.0, 1.0, 1.0
-        if ctx[5][light, R_SHADOWS] != 0.0:
+        if ctx.shadows[light, R_SHADOWS] != 0.0:
             vr, vg, vb = _shadow(light, x, y, z, lx, ly, lz, dist, ctx)
         w = hg(ray[3] * lx + ray[4] * ly + ray[5] * lz, mp[M_G]) * math.exp(
             -light_leg_depth(x, y, z, lx, ly, lz, dist, ctx))
@@ -381,8 +396,8 @@ def _cone_roots(ray, px, py, pz, ax, ay, az, c, out, n):
 @njit(cache=True, fastmath=False)
 def light_interval(light, ray, t0, t1, ctx):
     """The part of ``[t0, t1]`` where ``light`` can be non-zero (its range sphere; all of it if directional)."""
-    ints, fl = ctx[1], ctx[2]
-    if ints[light, lp.I_KIND] == 2:
+    ints, fl = ctx.lights.ints, ctx.lights.floats
+    if ints[light, lp.I_KIND] == lp.KIND_DIRECTIONAL:
         return t0, t1
     wx, wy, wz = ray[0] - fl[light, lp.F_PX], ray[1] - fl[light, lp.F_PY], ray[2] - fl[light, lp.F_PZ]
     b = wx * ray[3] + wy * ray[4] + wz * ray[5]
@@ -399,14 +414,14 @@ def split_points(ray, t0, t1, ctx, out):
     """Write the known discontinuities of ``f`` (or of its derivatives) in ``[t0, t1]`` into ``out``: light
     range spheres, spot cones (outer and inner), each point/spot light's closest approach, the medium box;
     returns the count. (Shadow boundaries are found separately by the visibility search.)"""
-    ints, fl = ctx[1], ctx[2]
+    ints, fl = ctx.lights.ints, ctx.lights.floats
     n = 0
-    a, b = clip_to_bounds(ctx[6], ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
+    a, b = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
     out[0], out[1] = a, b
     n = 2
     for light in range(ints.shape[0]):
         kind = ints[light, lp.I_KIND]
-        if kind == 2:
+        if kind == lp.KIND_DIRECTIONAL:
             continue
         lo, hi = light_interval(light, ray, t0, t1, ctx)
         if hi > lo:
@@ -415,7 +430,7 @@ def split_points(ray, t0, t1, ctx, out):
         px, py, pz = fl[light, lp.F_PX], fl[light, lp.F_PY], fl[light, lp.F_PZ]
         out[n] = (px - ray[0]) * ray[3] + (py - ray[1]) * ray[4] + (pz - ray[2]) * ray[5]
         n += 1
-        if kind == 1:
+        if kind == lp.KIND_SPOT:
             ax, ay, az = fl[light, lp.F_DX], fl[light, lp.F_DY], fl[light, lp.F_DZ]
             n = _cone_roots(ray, px, py, pz, ax, ay, az, fl[light, lp.F_COS_OUTER], out, n)
             n = _cone_roots(ray, px, py, pz, ax, ay, az, fl[light, lp.F_COS_INNER], out, n)

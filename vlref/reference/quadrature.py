@@ -201,8 +201,8 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _reference_kernel(origin, dirs, t_end, geo, lights, medium, rel_tol, abs_tol, shadow_samples, max_intervals,
-                      max_splits):
+def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
+                      shadow_samples, max_intervals, max_splits):
     h, w = t_end.shape
     out = np.zeros((h, w, 3))
     trans = np.ones((h, w))
@@ -214,7 +214,8 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, medium, rel_tol, abs_tol
         y = p // w
         x = p - y * w
         ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
-        ctx = (geo,) + lights + medium  # assembled per pixel: Numba's parfor cannot pass nested tuples in
+        # assembled per pixel: Numba's parfor cannot pass nested tuples in
+        ctx = ig.ReferenceContext(geo, lights, shadows, medium, light_extinction, bounded)
         total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
                                            max_intervals, max_splits)
         out[y, x] = total
@@ -275,8 +276,8 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     origin = np.asarray(cam.position, dtype=np.float64)
     max_splits = ig.max_split_points(ctx, shadow_samples)
     # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); pixels are independent
-    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], ctx[0], ctx[1:6], ctx[6:], float(rel_tol),
-                               float(abs_tol), int(shadow_samples), int(max_intervals), max_splits)
+    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx, float(rel_tol), float(abs_tol),
+                               int(shadow_samples), int(max_intervals), max_splits)
              for y0, y1 in row_bands(t_end.shape[0])]
     inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
     if progress is not None:

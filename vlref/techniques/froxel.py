@@ -56,10 +56,9 @@ def render(scene, frame) -> dict:
     lights = frame.lights.astype(np.float64)
     sm = frame.shadow_maps()
     scatter = np.empty((gh, gw, p.slices, 4))
-    froxel_scatter(origin, column_rays(cam, gw, gh, xi[0], xi[1]), forward, bounds, xi[2], medium.params,
-                   medium.noise, lights.ints, lights.floats, lights.cookies, lights.lut, sm.ints, sm.floats, sm.data,
-                   sm.tint, frame.geometry.arrays, bool(p.light_extinction),
-                   int(math.ceil(math.sqrt(resolved(scene, "steps")))), scatter)
+    froxel_scatter(origin, column_rays(cam, gw, gh, xi[0], xi[1]), forward, bounds, xi[2], medium, lights, sm.table,
+                   frame.geometry.arrays, bool(p.light_extinction), int(math.ceil(math.sqrt(resolved(scene, "steps")))),
+                   scatter)
     centre = column_rays(cam, gw, gh)
     out = {"froxel_slices": bounds[None, :], "froxel_scatter": grid_image(scatter)}
     lit = scatter

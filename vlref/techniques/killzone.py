@@ -21,7 +21,6 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
-from ..lights.pack import I_KIND
 from ..march.killzone import kz_march, kz_segments, view_transmittance
 from ..march.patterns import offsets
 from ..medium import pack_medium
@@ -64,7 +63,6 @@ def render(scene, frame) -> dict:
     packed = frame.lights
     sm = frame.shadow_maps(p.shadow_filter)
     camp = np.asarray(cam.position, dtype=np.float64)
-    g = scene.medium.anisotropy
     depth = frame.gbuffer.depth
 
     out: dict[str, np.ndarray] = {}
@@ -85,11 +83,9 @@ def render(scene, frame) -> dict:
             beta = offsets(sampling, w, h, scene.render.seed)
             out[f"offsets_{res}"] = beta
             for i in lights:
-                kind = int(packed.ints[i, I_KIND])
-                a, b = kz_segments(camp, dirs, t_end, kind, packed.floats, i)
-                buf += kz_march(camp, dirs, a, b, beta, n_steps, packed.ints, packed.floats, packed.cookies,
-                                packed.lut, i, med.params, med.noise, g, p.transmittance, sm.ints, sm.floats,
-                                sm.data, sm.tint, frame.geometry.arrays)
+                a, b = kz_segments(camp, dirs, t_end, packed, i)
+                buf += kz_march(camp, dirs, a, b, beta, n_steps, i, packed, med, sm.table, frame.geometry.arrays,
+                                p.transmittance)
             out[f"march_{res}"] = buf.copy()
         prev = {"half": "quarter", "full": "half"}.get(res)
         if prev in buffers:
@@ -106,7 +102,7 @@ def render(scene, frame) -> dict:
         out["blur_h"], out["blur_v"] = blur_h, light
     dirs = cam.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
-    trans = (view_transmittance(camp, dirs, t_end, med.params, med.noise) if p.transmittance
+    trans = (view_transmittance(camp, dirs, t_end, med) if p.transmittance
              else np.ones((H, W)))
     out["inscatter"] = light
     out["transmittance"] = trans

@@ -55,11 +55,9 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     with numba.parallel_chunksize(MARCH_CHUNK):
         for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, SAMPLES_PER_BAND)):
             band = np.zeros((packed.count, y1 - y0, w, 3), dtype=dtype)
-            march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium.params,
-                           medium.noise, packed.ints, packed.floats, packed.cookies, packed.lut, shadow_maps.ints,
-                           shadow_maps.floats, shadow_maps.data, shadow_maps.tint, geo,
-                           bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))),
-                           band, trans[y0:y1])
+            march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
+                           shadow_maps.table, geo, bool(scene.techniques.physical.light_extinction),
+                           int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
             per_light[:, y0:y1] = band
     return per_light, trans
 

@@ -32,7 +32,8 @@ from numba import njit, prange
 from ..camera import camera_from_settings
 from ..geometry import raycast, shadow_transmittance
 from ..post.composite import composite_add
-from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, radial_blur, radiate)
+from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, occlusion_opaque,
+                           occlusion_transparent, radial_blur, radiate)
 from ..post.upsample import bilinear_upsample
 
 __all__ = ["render", "radial_light", "light_target", "light_in_frame", "variant_params", "occlusion_buffer", "disc_coverage",
@@ -118,11 +119,10 @@ def occlusion_buffer(scene, frame, width: int, height: int, variant: str) -> np.
     dirs = cam.ray_directions(width, height)
     t_opaque = np.where(np.isfinite(g.distance), g.distance, 1e30)
     trans = _transparent_pass(frame.geometry.arrays, np.asarray(cam.position, dtype=np.float64), dirs, t_opaque)
-    sky = (g.object_id < 0).astype(np.float64)[..., None]
+    sky = occlusion_opaque(g.object_id)
     if variant == "gpugems":
-        return sky * trans
-    alpha = 1.0 - trans.mean(axis=2, keepdims=True)
-    return np.repeat(alpha * (1.0 - alpha) + (1.0 - alpha) * sky, 3, axis=2)
+        return sky[..., None] * trans
+    return occlusion_transparent(sky, 1.0 - trans.mean(axis=2), mode="disenone")
 
 
 def render(scene, frame) -> dict:

@@ -25,9 +25,10 @@ from ..errors import InputError
 from ..lights.attenuation import ATTENUATION_CODES, UNITY
 from ..lights.cone import CONE_CODES
 from ..lights.cookies import load_cookie
-from ..lights.pack import pack_lights
-from ..march.segments import cone_segment, sphere_segment
-from ..march.slightlymad import CONE_COOKIE_ONLY, dither_offsets, spot_profile_cookie, vl_march, vl_view_tau
+from ..lights.pack import F_CB, F_CR, KIND_CODES, KIND_DIRECTIONAL, pack_lights
+from ..march.segments import volume_intervals
+from ..march.slightlymad import (CONE_COOKIE_ONLY, VlLight, VlMarch, dither_offsets, spot_profile_cookie, vl_march,
+                                 vl_view_tau)
 from ..medium import pack_medium
 from ..post.blur import vl_blur_pass
 from ..post.composite import FP16_MAX, blend_add_fp16, composite_vl, fp16
@@ -53,12 +54,13 @@ def srgb_to_linear(c) -> np.ndarray:
     return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
 
 
-def vl_coefficients(scene, p) -> tuple[float, float, float]:
-    """``(σs, σt, g)`` of the march: VL's parameters, or the scene's ``[medium]`` when ``medium = "scene"``."""
+def vl_coefficients(scene, p) -> tuple[float, float]:
+    """``(σs, σt)`` of the march: VL's parameters, or the scene's ``[medium]`` when ``medium = "scene"``.
+    HG's ``g`` (``MieG``) is the packed medium's anisotropy (:func:`vl_medium`)."""
     if p.medium == "scene":
         m = scene.medium
-        return m.scattering, m.extinction, m.anisotropy
-    return p.scattering, p.extinction, p.mie_g
+        return m.scattering, m.extinction
+    return p.scattering, p.extinction
 
 
 def vl_medium(scene, p):
@@ -131,15 +133,7 @@ def _cone_interval(light, cam, dirs, half_angle_deg):
     p = np.asarray(light.position, dtype=np.float64)
     cos_h = math.cos(math.radians(half_angle_deg))
     big = light.range / cos_h * 1.001
-    h, w = dirs.shape[:2]
-    enter, leave = np.full((h, w), np.inf), np.full((h, w), -np.inf)
-    for r in range(h):
-        for c in range(w):
-            d = dirs[r, c]
-            t0, t1 = cone_segment(p[0], p[1], p[2], a[0], a[1], a[2], cos_h, big, cam[0], cam[1], cam[2],
-                                  d[0], d[1], d[2], -1e9, 1e9)
-            if t1 > t0:
-                enter[r, c], leave[r, c] = t0, t1
+    enter, leave = volume_intervals(cam, dirs, p, a, cos_h, big, True, -1e9, 1e9)
     # the flat cap: a.(x - p) <= R
     cap = np.asarray([[*a, a @ p + light.range]])
     e2, l2 = _convex_interval(cap, cam, dirs)
@@ -167,13 +161,7 @@ def light_segments(light, cam, dirs, t_surf, params, max_ray_length):
     p = np.asarray(light.position, dtype=np.float64)
     R = light.range
     if light.type == "point":
-        enter, leave = np.full((h, w), np.inf), np.full((h, w), -np.inf)
-        for r in range(h):
-            for c in range(w):
-                d = dirs[r, c]
-                t0, t1 = sphere_segment(p[0], p[1], p[2], R, cam[0], cam[1], cam[2], d[0], d[1], d[2], -1e9, 1e9)
-                if t1 > t0:
-                    enter[r, c], leave[r, c] = t0, t1
+        enter, leave = volume_intervals(cam, dirs, p, p, 1.0, R, False, -1e9, 1e9)
         inside = np.sum((p - cam) ** 2) < (R + 1.0) ** 2
         a_exit = leave
     else:
@@ -259,7 +247,9 @@ def render(scene, frame) -> dict:
     lut, cookie = _lut(scene, p), _cookie(scene, p)
     camp = np.asarray(cam.position, dtype=np.float64)
     sm = frame.shadow_maps("hard")
-    sigma_s, sigma_t, mie_g = vl_coefficients(scene, p)
+    sigma_s, sigma_t = vl_coefficients(scene, p)
+    march = VlMarch(n_steps, sigma_s, sigma_t, p.right_endpoint, p.initial_half_tau)
+    shadows = sm.table
 
     out = {"depth_march": eye_lo, "dither": beta}
     volume = np.zeros((h, w, 4))
@@ -268,25 +258,23 @@ def render(scene, frame) -> dict:
         t0, length, covered = light_segments(light, camp, dirs, t_surf, p, p.max_ray_length)
         lf = packed.floats[i].copy()
         if light.type == "point" and p.point_srgb_quirk:
-            lf[12:15] = srgb_to_linear(lf[12:15])
+            lf[F_CR:F_CB + 1] = srgb_to_linear(lf[F_CR:F_CB + 1])
         att = UNITY if p.attenuation == "unity_lut" else ATTENUATION_CODES[light.attenuation]
         cone = CONE_COOKIE_ONLY if p.spot_cone == "cookie" else CONE_CODES[light.cone]
-        kind = {"point": 0, "spot": 1, "directional": 2}[light.type]
-        rgb, tau = vl_march(camp, dirs, t0, length, covered, beta, n_steps, kind, lf, att, cone,
-                            lut if p.attenuation == "unity_lut" else packed.lut, cookie, sigma_s,
-                            sigma_t, mie_g, p.right_endpoint, p.initial_half_tau, med.params, med.noise,
-                            sm.ints, sm.floats, sm.data, sm.tint, frame.geometry.arrays, packed.floats, i,
-                            p.cube_shadow_factor)
+        kind = KIND_CODES[light.type]
+        record = VlLight(i, kind, lf, att, cone, lut if p.attenuation == "unity_lut" else packed.lut, cookie,
+                           p.cube_shadow_factor)
+        rgb, tau = vl_march(camp, dirs, t0, length, covered, beta, march, record, med, packed, shadows,
+                            frame.geometry.arrays)
         out[f"light{i}"] = rgb
         volume[..., :3] = blend_add_fp16(volume[..., :3], rgb) if p.fp16 else volume[..., :3] + rgb
-        if kind == 2:
+        if kind == KIND_DIRECTIONAL:
             alpha = np.exp(-tau)
             if p.skybox_extinction_quirk:
                 alpha = np.where(sky, alpha + (1.0 - alpha) * (1.0 - p.skybox_extinction), alpha)
             volume[..., 3] = fp16(alpha) if p.fp16 else alpha
     if not p.point_spot_alpha_zero and any(l.type != "directional" for l in scene.lights):
-        view = np.exp(-vl_view_tau(camp, dirs, np.minimum(t_surf, p.max_ray_length), beta, n_steps,
-                                   sigma_t, med.params, med.noise))
+        view = np.exp(-vl_view_tau(camp, dirs, np.minimum(t_surf, p.max_ray_length), beta, n_steps, sigma_t, med))
         if not any(l.type == "directional" for l in scene.lights):
             volume[..., 3] = fp16(view) if p.fp16 else view
     out["march"] = volume.copy()

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..camera import linear_to_raw, raw_to_linear
 from ..errors import InputError
+from ..lights.pack import F_DX, F_DZ
 from ..march.urp import urp_hash, urp_march
 from ..post.blur import urp_article_blur_pass
 from ..post.composite import composite_urp, unorm16
@@ -89,10 +90,9 @@ def render(scene, frame) -> dict:
             else urp_hash(w, h, p.uv_origin))
     sm = frame.shadow_maps(p.shadow_filter)
     packed = frame.lights
-    sun = np.asarray(packed.floats[li, 3:6], dtype=np.float64)
+    sun = np.asarray(packed.floats[li, F_DX:F_DZ + 1], dtype=np.float64)
     fog = store(urp_march(np.asarray(cam.position, dtype=np.float64), dirs, length, rand, n_steps, p.jitter,
-                          p.scattering, sun, sm.ints, sm.floats, sm.data, sm.tint, frame.geometry.arrays,
-                          packed.floats, li))
+                          p.scattering, sun, sm.table, frame.geometry.arrays, packed.floats, li))
     blur_h = store(urp_article_blur_pass(fog, raw_full, 1, p.gauss_samples, p.gauss_amount, uv_origin=p.uv_origin))
     blur_v = store(urp_article_blur_pass(blur_h, raw_full, 0, p.gauss_samples, p.gauss_amount, uv_origin=p.uv_origin))
     depth_low = store(raw_lo)
