@@ -179,7 +179,7 @@ def explorer_scene(scene, technique, scattering, absorption, anisotropy, power, 
         killzone=dataclasses.replace(t.killzone, blur=blur),
         slightlymad=dataclasses.replace(t.slightlymad, medium="scene", blur=blur, depth_downsample=vl_depth,
                                         dither=DITHER.get(sampling, "none")),
-        urp=dataclasses.replace(t.urp, scattering=-anisotropy, gauss_samples=t.urp.gauss_samples if blur else 0)))
+        urp=dataclasses.replace(t.urp, anisotropy=anisotropy, gauss_samples=t.urp.gauss_samples if blur else 0)))
 
 
 preview = PreviewRenderer()

@@ -124,3 +124,23 @@ def test_every_bundled_scene_loads_and_describes_itself():
 def test_unknown_bundled_name_lists_the_bundled_scenes():
     with pytest.raises(InputError, match="pillars"):
         load_scene("no_such_scene")
+
+
+def test_urp_scattering_is_a_deprecated_alias_of_minus_anisotropy(tmp_path):
+    p = write(tmp_path, MINIMAL + "[techniques.urp]\nscattering = -0.5\n")
+    with pytest.warns(DeprecationWarning, match=r"techniques\.urp\.scattering is deprecated: use "
+                                                r"techniques\.urp\.anisotropy = 0\.5"):
+        old = load_scene(p)
+    assert old.techniques.urp.anisotropy == 0.5
+    assert old == load_scene(write(tmp_path, MINIMAL + "[techniques.urp]\nanisotropy = 0.5\n", "new.toml")).replace(
+        source=old.source)
+    with pytest.warns(DeprecationWarning):
+        assert load_scene(write(tmp_path, MINIMAL), ["techniques.urp.scattering=0.25"]).techniques.urp.anisotropy \
+            == -0.25
+
+
+@pytest.mark.parametrize("text, reason", [("scattering = 0.1\nanisotropy = 0.1", "give techniques.urp.anisotropy only"),
+                                          ('scattering = "x"', "expected a number, got a string")])
+def test_urp_scattering_alias_errors(tmp_path, text, reason):
+    p, msg = error_of(tmp_path, MINIMAL + "[techniques.urp]\n" + text + "\n")
+    assert msg.startswith(f"{p}: techniques.urp.scattering: ") and reason in msg

@@ -5,11 +5,12 @@ the reconstructed world position ``P`` (at the far plane on sky):
 
     L = min(|P - c|, MaxDistance),  Δ = L / Steps,  j = rand(u, v) · Δ · Jitter / 100
     x_i = c + (j + i Δ) d,  i = 0 .. Steps - 2          (Steps - 1 samples; the end is not adjusted)
-    F = (1 / Steps) Σ_i [S(x_i) > 0] · saturate(p_HG(dot(d, s); g))
+    F = (1 / Steps) Σ_i [S(x_i) > 0] · saturate(p_HG(dot(d, l); g))
 
-``rand(u, v) = frac(sin(41 u + 289 v) · 45758.5453)``, ``s`` the light's *forward* vector (so
-``g_urp = -g`` of :func:`vlref.phase.hg`'s convention), ``S`` the main-light shadow attenuation used
-only as a binary test. The hash depends on the GPU's ``sin`` for arguments up to ~330 rad and is NOT
+``rand(u, v) = frac(sin(41 u + 289 v) · 45758.5453)``, ``l`` the unit vector toward the light and ``g``
+in :func:`vlref.phase.hg`'s convention (the tutorial evaluates ``p_HG(dot(d, s); _Scattering)`` with
+``s = -l`` the light's forward vector, i.e. ``_Scattering = -g``: the same value bit for bit, as both
+negations are exact), ``S`` the main-light shadow attenuation used only as a binary test. The hash depends on the GPU's ``sin`` for arguments up to ~330 rad and is NOT
 reproducible across GPUs: :func:`urp_hash` evaluates it in float32 with NumPy's ``sin``; ports
 inject their own buffer (``techniques.urp.jitter_path``) or compare statistically.
 """
@@ -44,11 +45,11 @@ def urp_hash(width: int, height: int, uv_origin: str = "bottom") -> np.ndarray:
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def urp_march(cam, dirs, length, rand, n_steps, jitter, g, sun, shadows, geo, lf, light):
+def urp_march(cam, dirs, length, rand, n_steps, jitter, g, toward, shadows, geo, lf, light):
     """The fog ``F`` (h, w) of the module docstring, prange over pixels.
 
     dirs (h, w, 3) unit rays; length (h, w) the clamped ray length ``L``; rand (h, w) the hash;
-    sun (3,) the light's forward vector; ``shadows`` the :class:`~vlref.lights.shadowmaps.ShadowTable`, ``lf``
+    toward (3,) the unit vector toward the light (minus its forward vector); ``shadows`` the :class:`~vlref.lights.shadowmaps.ShadowTable`, ``lf``
     the packed light floats, ``light`` the light's index.
     """
     h, w = length.shape
@@ -58,7 +59,7 @@ def urp_march(cam, dirs, length, rand, n_steps, jitter, g, sun, shadows, geo, lf
         dx, dy, dz = dirs[r, c, 0], dirs[r, c, 1], dirs[r, c, 2]
         step = length[r, c] / n_steps
         t = rand[r, c] * step * jitter / 100.0
-        phase = min(max(hg(dx * sun[0] + dy * sun[1] + dz * sun[2], g), 0.0), 1.0)
+        phase = min(max(hg(dx * toward[0] + dy * toward[1] + dz * toward[2], g), 0.0), 1.0)
         acc = 0.0
         for i in range(n_steps - 1):
             x, y, z = cam[0] + t * dx, cam[1] + t * dy, cam[2] + t * dz

@@ -14,6 +14,9 @@ The dataclasses are the schema: each field's type hint says what it accepts, and
 
 Every error is an :class:`vlref.errors.InputError` reading ``FILE: key.path: reason``, and
 unknown keys come with the nearest known key as a suggestion.
+
+A class may rename a key: ``RENAMED_KEYS = {old: (new, convert)}`` reads a number given under ``old``
+as ``new = convert(value)`` with a :class:`DeprecationWarning` naming the new key.
 """
 
 from __future__ import annotations
@@ -22,6 +25,7 @@ import dataclasses
 import difflib
 import math
 import typing
+import warnings
 from pathlib import Path
 from typing import Any, Union
 
@@ -60,6 +64,7 @@ def _type_name(value: Any) -> str:
 def _build_dataclass(cls: type, data: Any, ctx: _Ctx, path: str) -> Any:
     if not isinstance(data, dict):
         ctx.fail(path or "(top level)", f"expected a table, got {_type_name(data)}")
+    data = _renamed(cls, data, ctx, path)
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init and not f.metadata.get("internal")}
     for key in data:
         if key not in fields:
@@ -81,6 +86,23 @@ def _build_dataclass(cls: type, data: Any, ctx: _Ctx, path: str) -> Any:
             key, reason = problem
             ctx.fail(join_path(path, key) if key else path, reason)
     return obj
+
+
+def _renamed(cls: type, data: dict, ctx: _Ctx, path: str) -> dict:
+    """``data`` with each deprecated key of ``cls.RENAMED_KEYS`` replaced by its new key (module docstring)."""
+    for old, (new, convert) in getattr(cls, "RENAMED_KEYS", {}).items():
+        if old not in data:
+            continue
+        old_path, new_path = join_path(path, old), join_path(path, new)
+        if new in data:
+            ctx.fail(old_path, f"deprecated alias of {new_path}; give {new_path} only")
+        value = data[old]
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            ctx.fail(old_path, f"expected a number, got {_type_name(value)}")
+        warnings.warn(f"{ctx.file}: {old_path} is deprecated: use {new_path} = {convert(value)!r}",
+                      DeprecationWarning, stacklevel=2)
+        data = {**{k: v for k, v in data.items() if k != old}, new: convert(value)}
+    return data
 
 
 def _convert(tp: Any, value: Any, meta: Any, ctx: _Ctx, path: str) -> Any:

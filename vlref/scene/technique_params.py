@@ -122,13 +122,20 @@ class SlightlyMadParams:
 
 @dataclass(frozen=True)
 class UrpParams:
-    """Valerio Marty's URP tutorial (SOURCES §2: the Medium article's listing P1)."""
+    """Valerio Marty's URP tutorial (SOURCES §2: the Medium article's listing P1).
+
+    ``scattering`` (the tutorial's ``_Scattering``, HG g with the reversed sign) is a deprecated alias
+    read as ``anisotropy = -scattering``.
+    """
+
+    RENAMED_KEYS = {"scattering": ("anisotropy", lambda value: -value)}
 
     steps: int = F(25, "steps (the loop runs steps - 1 times and divides by steps)", min=2, max=4096)
     resolution: str = F("full", "downsampling: full (off), half, third, quarter",
                         choices=("full", "half", "third", "quarter"))
     intensity: float = F(1.0, "composite gain", min=0.0)
-    scattering: float = F(0.0, "HG g with the tutorial's reversed sign", gt=-1.0, lt=1.0)
+    anisotropy: float = F(0.0, "Henyey-Greenstein g in vlref's sign (> 0: forward scattering, bright toward the "
+                          "sun); the tutorial's _Scattering is -anisotropy", gt=-1.0, lt=1.0)
     max_distance: float = F(75.0, "maxDistance (metres)", gt=0.0)
     jitter: float = F(250.0, "jitter, percent of a step", min=0.0)
     jitter_path: Optional[str] = F(None, "inject the hash buffer rand(uv) (.npy or .exr, march resolution, row 0 "

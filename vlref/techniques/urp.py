@@ -90,9 +90,9 @@ def render(scene, frame) -> dict:
             else urp_hash(w, h, p.uv_origin))
     sm = frame.shadow_maps(p.shadow_filter)
     packed = frame.lights
-    sun = np.asarray(packed.floats[li, F_DX:F_DZ + 1], dtype=np.float64)
+    toward = -np.asarray(packed.floats[li, F_DX:F_DZ + 1], dtype=np.float64)
     fog = store(urp_march(np.asarray(cam.position, dtype=np.float64), dirs, length, rand, n_steps, p.jitter,
-                          p.scattering, sun, sm.table, frame.geometry.arrays, packed.floats, li))
+                          p.anisotropy, toward, sm.table, frame.geometry.arrays, packed.floats, li))
     blur_h = store(urp_article_blur_pass(fog, raw_full, 1, p.gauss_samples, p.gauss_amount, uv_origin=p.uv_origin))
     blur_v = store(urp_article_blur_pass(blur_h, raw_full, 0, p.gauss_samples, p.gauss_amount, uv_origin=p.uv_origin))
     depth_low = store(raw_lo)
