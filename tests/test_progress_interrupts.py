@@ -158,18 +158,15 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     ("slightlymad_spot", ['render.technique="physical"']),  # density noise
     ("pillars", ['render.precision="float32"']),
 ])
-def test_the_kernel_frame_compiles_the_kernels_the_real_frame_calls(scene_name, extra):
-    """``vlref render`` compiles the shadow-map cast and the march ahead on a 1×1 frame with no objects and
-    a 1-texel map: it must have exactly the types of the real frame's calls, or the real render would
-    compile again."""
-    from vlref.lights.shadowmaps import _cast_map
+def test_the_kernel_frame_compiles_the_march_the_real_frame_calls(scene_name, extra):
+    """``vlref render`` compiles the march ahead on a 1×1 frame with no objects and no shadow maps: it
+    must have exactly the types of the real frame's call, or the real render would compile again."""
     from vlref.march.physical import march_physical
-    from vlref.warmup import ahead_cached, compile_ahead
+    from vlref.warmup import compile_march, march_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
-    called = set(march_physical.signatures), set(_cast_map.signatures)
-    assert all(called)
-    compile_ahead(scene)
-    assert (set(march_physical.signatures), set(_cast_map.signatures)) == called
-    assert ahead_cached(scene)  # cache=True wrote them; the render command then skips the second process
+    called = set(march_physical.signatures)
+    compile_march(scene)
+    assert set(march_physical.signatures) == called
+    assert march_cached(scene)  # cache=True wrote it; the render command then skips the second process

@@ -74,9 +74,10 @@ def scene_hash(scene: Scene) -> str:
 class Frame:
     """Everything the volumetric passes of one frame read, built once per render.
 
-    ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a lookup filter (``None`` = each light's own) to its
-    :class:`~vlref.lights.shadowmaps.ShadowMaps`; it fills on demand, or a port supplies its own maps
-    (:func:`vlref.port.port_frame`).
+    ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a
+    lookup filter (``None`` = each light's own) to its :class:`~vlref.lights.shadowmaps.ShadowMaps`; it
+    fills on demand, or a port supplies its own maps (:func:`vlref.port.port_frame`). ``tick(name)``, when
+    given, reports the on-demand shadow maps as a render stage (``"shadow maps"``) once they are built.
     """
 
     scene: Scene
@@ -87,6 +88,7 @@ class Frame:
     scene_colour: np.ndarray
     shadow_cache: dict = field(default_factory=dict, repr=False)
     history: Any = field(default=None, repr=False)
+    tick: Callable[[str], None] | None = field(default=None, repr=False)
 
     def shadow_maps(self, shadow_filter: str | None = None):
         """The lights' shadow maps, built on first use (cascades depend on the camera).
@@ -105,6 +107,8 @@ class Frame:
                         if l.shadows is not None else l for l in scene.lights))
                 maps = build_shadow_maps(scene, self.camera, self.geometry, self.lights)
             self.shadow_cache[shadow_filter] = maps
+            if shadow_filter is None and self.tick is not None:
+                self.tick("shadow maps")
         return self.shadow_cache[shadow_filter]
 
 
@@ -135,7 +139,7 @@ def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Fr
     lights = pack_lights(scene)
     colour = scene_colour(gbuffer, scene, geometry, lights)
     tick("shading")
-    return Frame(scene, camera, geometry, gbuffer, lights, colour)
+    return Frame(scene, camera, geometry, gbuffer, lights, colour, tick=tick)
 
 
 def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] | None = None,

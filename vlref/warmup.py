@@ -15,13 +15,13 @@ solving a tiny reference:
 
 A task that finds its kernels cached only loads them: a second ``vlref warmup`` takes seconds.
 
-Without a warm-up, ``vlref render`` splits its compile over two processes
-(:func:`compile_ahead_in_background`): while the main process compiles the BVH build, the ray cast
-and the surface shading, a second process compiles the shadow-map ray cast and (``physical``) the
-march for the scene's types on a 1×1 frame that needs none of the other kernels (no objects, the
-sky at its one pixel, one 2×2 shadow map: the same array types, nearly empty), and the main
-process picks the results up from the cache when it reaches them. The split balances the measured
-compile times (about 30 s each side on an idle 2-core box; BENCHMARKS.md).
+Without a warm-up, ``vlref render`` of the ``physical`` technique splits its compile over two
+processes (:func:`march_ahead`): while the main process compiles the frame kernels (BVH build, ray
+cast, shading, shadow maps), a second process compiles the march for the scene's types on a 1×1
+frame that needs none of them (no objects, no shadow maps: the same array types, empty), and the
+main process picks it up from the cache when it reaches the march (the frame reports its shadow maps
+as built just before: ``Frame.tick``). The halves measure about 30 s each on an idle 2-core box
+(BENCHMARKS.md "Cold start").
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-__all__ = ["TASKS", "warmup", "compile_ahead", "compile_ahead_in_background", "ahead_cached"]
+__all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "march_cached"]
 
 TINY = ["render.width=16", "render.height=9", "render.steps=2"]
 # name -> (what runs, bundled scene (None: the default), overrides at TINY size); see the module docstring
@@ -126,9 +126,9 @@ def cache_location() -> str:
 
 
 def _kernel_frame(scene):
-    """The shadow maps' and the physical march's inputs for a 1×1 frame of ``scene`` built without any njit call: no objects
+    """The physical march's inputs for a 1×1 frame of ``scene`` built without any njit call: no objects
     (empty geometry arrays), no shadow maps (empty tables), the sky at every pixel. Every array has the
-    dtype, rank and layout of the full frame's, so the kernels compiled for it serve the real frame."""
+    dtype, rank and layout of the full frame's, so the march compiled for it serves the real frame."""
     from .camera import camera_from_settings
     from .geometry import build_geometry
     from .lights import pack_lights
@@ -142,66 +142,46 @@ def _kernel_frame(scene):
     return bare, camera, lights, build_shadow_maps(bare, camera, geometry, lights), geometry
 
 
-def compile_ahead(scene) -> None:
-    """Compile (or load) the shadow-map ray cast (when a light casts mapped shadows) and, for ``physical``,
-    the march, for ``scene``'s types on its 1×1 kernel frame (module docstring)."""
-    from .lights import pack_lights
-    from .lights.shadowmaps import build_shadow_maps
+def compile_march(scene) -> None:
+    """Compile (or load) the physical march for ``scene``'s types on its 1×1 kernel frame (module docstring)."""
     from .techniques import resolved
     from .techniques.physical import march_buffers
 
     bare, camera, lights, maps, geometry = _kernel_frame(scene)
-    mapped = [light for light in scene.lights if light.shadows is not None and light.shadows.enabled
-              and light.shadows.filter != "exact"]
-    if mapped:  # one 2×2 map of the first such light (every map is cast by the same kernel call; at 1×1 a
-        # directional light's broadcast ray directions would stay a read-only view: another array type)
-        one = bare.replace(lights=(dataclasses.replace(
-            mapped[0], shadows=dataclasses.replace(mapped[0].shadows, resolution=2, cascades=1)),))
-        build_shadow_maps(one, camera, geometry, pack_lights(one))
-    if scene.render.technique == "physical":
-        march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
-                      resolved(scene, "steps"), resolved(scene, "sampling"))
+    march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays, resolved(scene, "steps"),
+                  resolved(scene, "sampling"))
 
 
-def _cached(dispatcher, first_arg=None) -> bool:
-    """Whether Numba's cache index of ``dispatcher`` (read without compiling) holds an entry for this
-    machine and source, with ``first_arg`` as the type of its first argument when given. False when the
-    index cannot be read."""
+def march_cached(scene) -> bool:
+    """Whether Numba's cache holds the physical march for ``scene``'s precision (its index, read without
+    compiling). False when the index cannot be read."""
+    import numba
+
+    from .march.physical import march_physical
+
+    dtype = np.float32 if scene.render.precision == "float32" else np.float64
     try:
-        cache = dispatcher._cache
-        _, magic, code = cache._index_key((), dispatcher.targetctx.codegen())
-        return any(key[1] == magic and key[2] == code and key[0] and (first_arg is None or key[0][0] == first_arg)
+        cache = march_physical._cache
+        _, magic, code = cache._index_key((), march_physical.targetctx.codegen())
+        want = numba.typeof(np.zeros(3, dtype=dtype))
+        return any(key[1] == magic and key[2] == code and key[0] and key[0][0] == want
                    for key in cache._cache_file._load_index())
     except Exception:  # a Numba without these internals: assume cold
         return False
 
 
-def ahead_cached(scene) -> bool:
-    """Whether everything :func:`compile_ahead` compiles for ``scene`` is in Numba's cache already."""
-    import numba
-
-    from .lights.shadowmaps import _cast_map
-    from .march.physical import march_physical
-
-    if any(light.shadows is not None for light in scene.lights) and not _cached(_cast_map):
-        return False
-    if scene.render.technique != "physical":
-        return True
-    dtype = np.float32 if scene.render.precision == "float32" else np.float64
-    return _cached(march_physical, numba.typeof(np.zeros(3, dtype=dtype)))
-
-
 @contextlib.contextmanager
-def compile_ahead_in_background(scene) -> Iterator[Callable[[], None]]:
-    """Run :func:`compile_ahead` for ``scene`` in a second process while the block runs; yields ``ready()``,
-    which waits for it (call it before the shadow maps and the march). A no-op when everything is cached or
-    on one core. The process is terminated when the block exits early (an error, an interrupt)."""
+def march_ahead(scene) -> Iterator[Callable[[], None]]:
+    """Compile the physical march of ``scene`` in a second process while the block runs; yields ``ready()``,
+    which waits for it (call it before the march: :class:`vlref.render.Frame` ticks ``"shadow maps"`` just
+    before). A no-op for other techniques, a cached kernel or one core. The process is terminated when the
+    block exits early (an error, an interrupt)."""
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    if cores < 2 or ahead_cached(scene):
+    if scene.render.technique != "physical" or cores < 2 or march_cached(scene):
         yield lambda: None
         return
     with _spawn_ignoring_sigint() as ctx:
-        proc = ctx.Process(target=compile_ahead, args=(scene,), daemon=True)
+        proc = ctx.Process(target=compile_march, args=(scene,), daemon=True)
         proc.start()
     try:
         yield proc.join

@@ -32,18 +32,18 @@ def parser() -> argparse.ArgumentParser:
 def run(args) -> int:
     from ..io import output_dir, save_render
     from ..render import render
-    from ..warmup import compile_ahead_in_background
+    from ..warmup import march_ahead
 
     scene = load_scene_checked(args)
     if args.frames is not None:
         return _render_frames(args, scene)
-    # 4 render stages, then the files; cold shadow-map and march kernels compile in a second process meanwhile
-    with StageBar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, \
-            compile_ahead_in_background(scene) as ahead_ready:
+    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
+    with StageBar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
         def stage(name: str) -> None:
-            if name == "shading":  # the frame is done: the shadow maps and the march come next
-                ahead_ready()
-            bar.stage(name)
+            if name == "shadow maps":  # built (part of the volumetric stage): the march comes next
+                march_ready()
+            else:
+                bar.stage(name)
 
         result = render(scene, stages=args.stages, progress=stage)
         exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
