@@ -139,7 +139,7 @@ def _kernel_frame(scene):
     camera = camera_from_settings(bare.camera, 1, 1)
     geometry = build_geometry(bare)
     lights = pack_lights(bare)
-    return bare, camera, lights, build_shadow_maps(bare, camera, geometry, lights), geometry
+    return bare, camera, lights, build_shadow_maps(bare, camera, geometry, lights), geometry.arrays
 
 
 def compile_march(scene) -> None:
@@ -147,8 +147,8 @@ def compile_march(scene) -> None:
     from .techniques import resolved
     from .techniques.physical import march_buffers
 
-    bare, camera, lights, maps, geometry = _kernel_frame(scene)
-    march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays, resolved(scene, "steps"),
+    bare, camera, lights, maps, geo = _kernel_frame(scene)
+    march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geo, resolved(scene, "steps"),
                   resolved(scene, "sampling"))
 
 
@@ -162,7 +162,8 @@ def march_cached(scene) -> bool:
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     try:
         cache = march_physical._cache
-        _, magic, code = cache._index_key((), march_physical.targetctx.codegen())
+        codegen = march_physical.targetctx.codegen()
+        _, magic, code = cache._index_key((), codegen)
         want = numba.typeof(np.zeros(3, dtype=dtype))
         return any(key[1] == magic and key[2] == code and key[0] and key[0][0] == want
                    for key in cache._cache_file._load_index())
