@@ -300,3 +300,37 @@ def test_steps_are_placed_inside_the_medium_box():
     rel = np.abs(per[0][lit] / ref.inscatter[lit] - 1.0)
     assert np.median(rel) < 1e-3 and rel.max() < 1e-2
     np.testing.assert_allclose(trans, ref.transmittance, rtol=1e-12)
+
+
+@pytest.mark.parametrize("precision", ["float64", "float32"])
+def test_a_pixel_does_not_depend_on_its_packet(precision):
+    """The march runs packets of rays through vectorised lane loops (and a scalar remainder loop): a pixel
+    marched alone (lane 0 of a one-lane packet) gets the same bits as inside a full frame."""
+    import dataclasses
+
+    from vlref.bench.config import bench_scene
+    from vlref.march.patterns import offsets
+    from vlref.render import prepare_frame
+
+    base = bench_scene(24, 16, 8, "four", 64)
+    scene = dataclasses.replace(base, render=dataclasses.replace(base.render, precision=precision))
+    frame = prepare_frame(scene)
+    dtype = np.dtype(precision)
+    dirs = frame.camera.ray_directions().astype(dtype)
+    t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance).astype(dtype)
+    beta = offsets("bayer4", 24, 16, 0).astype(dtype)
+    origin = np.asarray(frame.camera.position, dtype=dtype)
+    args = (pack_medium(scene, dtype), frame.lights.astype(dtype), frame.shadow_maps().table, frame.geometry.arrays,
+            True, 3)
+    per = np.zeros((4, 16, 24, 3), dtype=dtype)
+    trans = np.empty((16, 24), dtype=dtype)
+    march_physical(origin, dirs, t_end, beta, 8, *args, per, trans)
+    assert per.max() > 0 and np.count_nonzero(per.sum(axis=-1), axis=(1, 2)).min() > 20
+    for i in range(16):
+        for j in range(24):
+            one = np.zeros((4, 1, 1, 3), dtype=dtype)
+            one_t = np.empty((1, 1), dtype=dtype)
+            march_physical(origin, np.ascontiguousarray(dirs[i:i + 1, j:j + 1]),
+                           np.ascontiguousarray(t_end[i:i + 1, j:j + 1]),
+                           np.ascontiguousarray(beta[i:i + 1, j:j + 1]), 8, *args, one, one_t)
+            assert np.array_equal(one[:, 0, 0], per[:, i, j]) and one_t[0, 0] == trans[i, j], (i, j)

@@ -33,11 +33,11 @@ import numpy as np
 from numba import njit
 
 from .errors import InputError
-from .numeric import cast
+from .numeric import cast, exp, expm1
 
-__all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "sigma",
-           "noise_value", "clip_to_bounds", "optical_depth", "fog_exponent", "fog_depth_ratio", "in_bounds",
-           "FOG_MAX_EXPONENT"]
+__all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
+           "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
+           "fog_depth_ratio", "in_bounds", "box_contains", "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
@@ -119,28 +119,49 @@ def noise_value(lattice, px, py, pz):
     return (c00 * (one - wy) + c10 * wy) * (one - wz) + (c01 * (one - wy) + c11 * wy) * wz
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
-def fog_exponent(mp, y):
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def height_exponent(base, falloff, y):
     """The height-fog exponent ``min(-(y - base) · falloff, FOG_MAX_EXPONENT)`` (fog factor = its exp)."""
-    return min(-(y - mp[M_FOG_BASE]) * mp[M_FOG_K], cast(y, FOG_MAX_EXPONENT))
+    return min(-(y - base) * falloff, cast(y, FOG_MAX_EXPONENT))
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def fog_exponent(mp, y):
+    """:func:`height_exponent` of the packed medium ``mp``."""
+    return height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], y)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def box_contains(x0, y0, z0, x1, y1, z1, x, y, z):
+    """The point lies in the closed box ``[x0, x1] × [y0, y1] × [z0, z1]``."""
+    return not (x < x0 or x > x1 or y < y0 or y > y1 or z < z0 or z > z1)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def in_bounds(mp, x, y, z):
     """The point lies in the medium's box (always, for an unbounded medium)."""
     if mp[M_BOUNDED] == cast(x, 0.0):
         return True
-    return not (x < mp[M_BX0] or x > mp[M_BX1] or y < mp[M_BY0] or y > mp[M_BY1] or z < mp[M_BZ0]
-                or z > mp[M_BZ1])
+    return box_contains(mp[M_BX0], mp[M_BY0], mp[M_BZ0], mp[M_BX1], mp[M_BY1], mp[M_BZ1], x, y, z)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def fog_depth_ratio(delta):
     """``(1 - e^{-δ})/δ`` for ``δ = |e_a - e_b| >= 0`` (``1 - δ/2`` below 1e-6): the height-fog optical
     depth of a segment is ``σt · L · e^{max(e_a, e_b)}`` times this."""
     if delta < cast(delta, 1e-6):
         return cast(delta, 1.0) - cast(delta, 0.5) * delta
-    return -math.expm1(-delta) / delta
+    return -expm1(-delta) / delta
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def smooth_density(mp, x, y, z):
+    """The density factor without the noise: ``[x ∈ bounds] · fog(y)`` (module docstring)."""
+    if not in_bounds(mp, x, y, z):
+        return cast(x, 0.0)
+    if mp[M_FOG] != cast(x, 0.0):
+        return exp(fog_exponent(mp, y))
+    return cast(x, 1.0)
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -148,12 +169,8 @@ def density(mp, lattice, x, y, z):
     """Density factor ρ(x) ≥ 0 (module docstring)."""
     zero = cast(x, 0.0)
     one = cast(x, 1.0)
-    if not in_bounds(mp, x, y, z):
-        return zero
-    rho = one
-    if mp[M_FOG] != zero:
-        rho = math.exp(fog_exponent(mp, y))
-    if mp[M_NOISE] != zero:
+    rho = smooth_density(mp, x, y, z)
+    if mp[M_NOISE] != zero and rho != zero:
         s = mp[M_NSCALE]
         n = noise_value(lattice, s * (x - mp[M_NSX]), s * (y - mp[M_NSY]), s * (z - mp[M_NSZ]))
         rho *= min(max(max(n - mp[M_NOFF], zero) * mp[M_NINT], zero), one)
@@ -167,7 +184,7 @@ def sigma(mp, lattice, x, y, z):
     return mp[M_SS] * rho, mp[M_ST] * rho
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     """``[t0, t1]`` clipped to the medium box (slab test); empty when the result has ``a >= b``."""
     if mp[M_BOUNDED] == cast(ox, 0.0):
@@ -190,23 +207,40 @@ def clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     return a, b
 
 
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _smooth_depth(mp, oy, dy, a, b):
+    """``τ(a, b)`` of the noiseless medium on an interval inside the box: ``σt L`` or the height-fog closed form."""
+    length = b - a
+    if mp[M_FOG] == cast(oy, 0.0):
+        return mp[M_ST] * length
+    ea = fog_exponent(mp, oy + a * dy)
+    eb = fog_exponent(mp, oy + b * dy)
+    return mp[M_ST] * length * exp(max(ea, eb)) * fog_depth_ratio(abs(ea - eb))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def smooth_optical_depth(mp, ox, oy, oz, dx, dy, dz, t0, t1):
+    """:func:`optical_depth` of a medium without noise (no loop, no call: the march's lane loops vectorise it)."""
+    zero = cast(ox, 0.0)
+    a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1)
+    if not b - a > zero or mp[M_ST] == zero:
+        return zero
+    return _smooth_depth(mp, oy, dy, a, b)
+
+
 @njit(cache=True, fastmath=False, forceinline=True)
 def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
     """τ = ∫_{t0}^{t1} σt(o + t d) dt for a unit direction ``d`` (module docstring); 0 for ``t1 <= t0``."""
     zero = cast(ox, 0.0)
+    if mp[M_NOISE] == zero:
+        return smooth_optical_depth(mp, ox, oy, oz, dx, dy, dz, t0, t1)
     a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1)
     length = b - a
     if not length > zero or mp[M_ST] == zero:
         return zero
-    if mp[M_NOISE] != zero:
-        h = length / cast(ox, n_sub)
-        acc = zero
-        for i in range(n_sub):
-            t = a + (cast(ox, i) + cast(ox, 0.5)) * h
-            acc += density(mp, lattice, ox + t * dx, oy + t * dy, oz + t * dz)
-        return mp[M_ST] * acc * h
-    if mp[M_FOG] == zero:
-        return mp[M_ST] * length
-    ea = fog_exponent(mp, oy + a * dy)
-    eb = fog_exponent(mp, oy + b * dy)
-    return mp[M_ST] * length * math.exp(max(ea, eb)) * fog_depth_ratio(abs(ea - eb))
+    h = length / cast(ox, n_sub)
+    acc = zero
+    for i in range(n_sub):
+        t = a + (cast(ox, i) + cast(ox, 0.5)) * h
+        acc += density(mp, lattice, ox + t * dx, oy + t * dy, oz + t * dz)
+    return mp[M_ST] * acc * h

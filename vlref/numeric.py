@@ -1,10 +1,33 @@
-"""Numeric helpers shared by the kernels."""
+"""Numeric helpers shared by the kernels: the float-type helper :func:`cast`, and :func:`exp` / :func:`expm1`
+written out so that LLVM can vectorise the loops that call them.
+
+``exp`` and ``expm1`` (float64 arithmetic; a float32 argument gives the float32 rounding of the float64 value):
+the argument is reduced as ``x = n ln2 + r``, ``n = round(x / ln2)``, ``|r| <= ln2/2``, with ``ln2`` split in
+two parts (Cody & Waite 1980, *Software Manual for the Elementary Functions*; the split constants are
+fdlibm's ``ln2_hi``/``ln2_lo``), then ``p = e^r - 1`` is the Taylor polynomial of degree 13 (truncation below
+``0.35^14/14! ≈ 4e-18``) and
+
+    exp(x)   = 2^n + 2^n p
+    expm1(x) = p                      (n = 0: r = x exactly, so small arguments keep their relative accuracy)
+             = (2^n - 1) + 2^n p      (otherwise; 2^n - 1 is exact for the n that occur)
+
+``n`` is read from the bits of ``x/ln2 + 1.5·2^52`` and ``2^n`` built from its bits: no table, no float→int
+conversion and no branch (selects only), which is what keeps a lane loop vectorisable where libm's ``exp``
+(a call) is not. Measured against libm on 2·10⁶ arguments per range in [-700, 700]: ``exp`` within 1 ulp,
+``expm1`` within 2 ulp (tests/test_numeric.py). Results below ``2^-1022`` flush to 0 (``expm1``: -1); above
+``709.78`` they are ``inf``; NaN stays NaN. The results do not depend on ``fastmath`` or on vectorisation
+(no reassociation: the same operations in the same order in every lane).
+"""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from numba import types
+from numba import njit, types
 from numba.extending import overload
+
+__all__ = ["cast", "exp", "expm1"]
 
 
 def cast(like, value):
@@ -21,3 +44,60 @@ def _cast_impl(like, value):
     if like == types.float32:
         return lambda like, value: np.float32(value)
     return lambda like, value: np.float64(value)
+
+
+_INV_LN2 = 1.4426950408889634
+_LN2_HI = 6.93147180369123816490e-01  # fdlibm ln2_hi: n * _LN2_HI is exact for |n| < 2^20
+_LN2_LO = 1.90821492927058770002e-10
+_SHIFTER = 6755399441055744.0  # 1.5 * 2^52: adding it rounds to an integer kept in the low mantissa bits
+_SHIFTER_BITS = int(np.float64(_SHIFTER).view(np.int64))
+_LO, _HI = -708.0, 709.782712893384  # exp(_LO) > 2^-1022; exp(_HI) < the largest float64
+(_C2, _C3, _C4, _C5, _C6, _C7, _C8, _C9, _C10, _C11, _C12, _C13) = (1.0 / math.factorial(k) for k in range(2, 14))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _reduced(x):
+    """``(n, 2^n, e^r - 1)`` for float64 ``x`` clamped to ``[_LO, _HI]`` (module docstring)."""
+    x = min(max(x, _LO), _HI)
+    k = x * _INV_LN2 + _SHIFTER
+    nf = k - _SHIFTER
+    n = np.float64(k).view(np.int64) - _SHIFTER_BITS
+    r = (x - nf * _LN2_HI) - nf * _LN2_LO
+    q = _C12 + r * _C13
+    q = _C11 + r * q
+    q = _C10 + r * q
+    q = _C9 + r * q
+    q = _C8 + r * q
+    q = _C7 + r * q
+    q = _C6 + r * q
+    q = _C5 + r * q
+    q = _C4 + r * q
+    q = _C3 + r * q
+    q = _C2 + r * q
+    p = r + (r * r) * q
+    two_n = np.int64((n + 1023) << 52).view(np.float64)
+    return n, two_n, p
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def exp(x):
+    """``e^x`` in the float type of ``x`` (module docstring)."""
+    v = np.float64(x)
+    n, two_n, p = _reduced(v)
+    y = two_n + two_n * p
+    y = 0.0 if v < _LO else y
+    y = np.inf if v > _HI else y
+    y = v if v != v else y
+    return cast(x, y)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def expm1(x):
+    """``e^x - 1`` in the float type of ``x``, accurate near 0 (module docstring)."""
+    v = np.float64(x)
+    n, two_n, p = _reduced(v)
+    y = p if n == 0 else (two_n - 1.0) + two_n * p
+    y = -1.0 if v < _LO else y
+    y = np.inf if v > _HI else y
+    y = v if v != v else y
+    return cast(x, y)

@@ -19,7 +19,7 @@ from .numeric import cast
 INV_4PI = 1.0 / (4.0 * math.pi)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def hg(cos_theta, g):
     """Henyey-Greenstein phase value (1/sr) for one cosine, in the precision of ``g``; valid for |g| < 1."""
     one = cast(g, 1.0)

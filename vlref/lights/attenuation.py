@@ -26,14 +26,14 @@ from ..numeric import cast
 from .cookies import filter_taps
 
 __all__ = ["ATTENUATION_CODES", "INVERSE_SQUARE", "UNITY", "WINDOWED", "MIN_DISTANCE",
-           "distance_attenuation", "unity_folk", "unity_lut_lookup"]
+           "analytic_attenuation", "distance_attenuation", "unity_folk", "unity_lut_lookup"]
 
 INVERSE_SQUARE, UNITY, WINDOWED = 0, 1, 2
 ATTENUATION_CODES = {"inverse_square": INVERSE_SQUARE, "unity": UNITY, "windowed": WINDOWED}
 MIN_DISTANCE = 0.01
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def unity_folk(u):
     """Default Unity falloff ``1/(1 + 25u) · saturate(5(1 - sqrt(u)))``, ``u = d²/R²``."""
     fade = min(max(cast(u, 5.0) * (cast(u, 1.0) - math.sqrt(u)), cast(u, 0.0)), cast(u, 1.0))
@@ -55,23 +55,33 @@ def unity_lut_lookup(lut, u):
     return cast(u, top * (1.0 - fr) + bot * fr)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def analytic_attenuation(law, d2, inv_range2):
+    """:func:`distance_attenuation` for the laws given by a formula (every law but ``unity`` with a LUT): no
+    table, no call, so the march's lane loops vectorise over it."""
+    u = d2 * inv_range2
+    one = cast(d2, 1.0)
+    if u >= one:
+        return cast(d2, 0.0)
+    if law == UNITY:
+        return unity_folk(u)
+    inv = one / max(d2, cast(d2, MIN_DISTANCE * MIN_DISTANCE))
+    if law == WINDOWED:
+        w = one - u * u
+        return w * w * inv
+    return inv
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
 def distance_attenuation(law, d2, inv_range2, lut):
     """Attenuation factor at squared distance ``d2`` (m²) for ``law`` (module docstring).
 
     ``inverse_square`` and ``windowed`` are in 1/m² (``E = I · factor``); ``unity`` is dimensionless.
     ``lut`` of size 0 selects the folk formula for ``unity``.
     """
-    u = d2 * inv_range2
-    one = cast(d2, 1.0)
-    if u >= one:
-        return cast(d2, 0.0)
-    if law == UNITY:
-        if lut.size == 0:
-            return unity_folk(u)
+    if law == UNITY and lut.size > 0:
+        u = d2 * inv_range2
+        if u >= cast(d2, 1.0):
+            return cast(d2, 0.0)
         return unity_lut_lookup(lut, u)
-    inv = one / max(d2, cast(d2, MIN_DISTANCE * MIN_DISTANCE))
-    if law == WINDOWED:
-        w = one - u * u
-        return w * w * inv
-    return inv
+    return analytic_attenuation(law, d2, inv_range2)

@@ -25,7 +25,8 @@ from numba import njit
 
 from ..numeric import cast
 
-__all__ = ["CONE_CODES", "CONE_UNITY", "CONE_LINEAR", "CONE_SMOOTHSTEP", "cone_falloff", "default_inner_angle"]
+__all__ = ["CONE_CODES", "CONE_UNITY", "CONE_LINEAR", "CONE_SMOOTHSTEP", "cone_falloff", "cone_polynomial",
+           "default_inner_angle"]
 
 CONE_UNITY, CONE_LINEAR, CONE_SMOOTHSTEP = 0, 1, 2
 CONE_CODES = {"unity": CONE_UNITY, "linear": CONE_LINEAR, "smoothstep": CONE_SMOOTHSTEP}
@@ -40,9 +41,24 @@ def default_inner_angle(law: str, spot_angle: float) -> float:
     return max(0.0, spot_angle - 10.0)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def cone_falloff(law, cos_t, cos_outer, cos_inner, half_outer, half_inner, unity_a, unity_b):
     """Cone factor in [0, 1] for ``cos_t`` (module docstring); angles in radians."""
+    if law != CONE_LINEAR:
+        return cone_polynomial(law, cos_t, cos_outer, cos_inner, unity_a, unity_b)
+    zero = cast(cos_t, 0.0)
+    one = cast(cos_t, 1.0)
+    if cos_t <= cos_outer:
+        return zero
+    if cos_t >= cos_inner:
+        return one
+    return min(max((half_outer - math.acos(cos_t)) / (half_outer - half_inner), zero), one)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def cone_polynomial(law, cos_t, cos_outer, cos_inner, unity_a, unity_b):
+    """:func:`cone_falloff` for the laws polynomial in ``cos_t`` (``unity``, ``smoothstep``): no call (the
+    ``linear`` law's ``acos`` is one), so the march's lane loops vectorise over it."""
     zero = cast(cos_t, 0.0)
     one = cast(cos_t, 1.0)
     if cos_t <= cos_outer:
@@ -52,7 +68,5 @@ def cone_falloff(law, cos_t, cos_outer, cos_inner, half_outer, half_inner, unity
         return a * a
     if cos_t >= cos_inner:
         return one
-    if law == CONE_LINEAR:
-        return min(max((half_outer - math.acos(cos_t)) / (half_outer - half_inner), zero), one)
     x = (cos_t - cos_outer) / (cos_inner - cos_outer)
     return x * x * (cast(cos_t, 3.0) - cast(cos_t, 2.0) * x)

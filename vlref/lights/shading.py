@@ -34,9 +34,38 @@ from .pack import (F_CB, F_CG, F_CK_SIZE, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, 
                    F_UX, F_UY, F_UZ, I_ATT, I_CK_FILTER, I_CK_H, I_CK_OFF, I_CK_W, I_CK_WRAP, I_CONE, I_KIND,
                    KIND_DIRECTIONAL, KIND_SPOT, PackedLights)
 
-__all__ = ["light_incidence", "scene_colour", "SURFACE_OFFSET"]
+__all__ = ["light_incidence", "light_vector", "cookie_rgb", "scene_colour", "SURFACE_OFFSET"]
 
 SURFACE_OFFSET = 1e-4
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def light_vector(px, py, pz, x, y, z):
+    """``(lx, ly, lz, dist, d2)``: the unit vector from ``(x, y, z)`` toward a light at ``(px, py, pz)``, the
+    distance and its square; ``l = 0`` at the light's own position. Scalars only (no array: called in the
+    march's vectorised lane loops)."""
+    wx, wy, wz = px - x, py - y, pz - z
+    d2 = wx * wx + wy * wy + wz * wz
+    dist = math.sqrt(d2)
+    inv = cast(x, 1.0) / dist if d2 > cast(x, 0.0) else cast(x, 1.0)
+    return wx * inv, wy * inv, wz * inv, dist, d2
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def cookie_rgb(lights, k, x, y, z):
+    """The cookie factor ``(r, g, b)`` (float64) of light ``k`` at ``(x, y, z)`` (:mod:`vlref.lights.cookies`);
+    the light must have a cookie (``ints[k, I_CK_OFF] >= 0``)."""
+    li, lf = lights.ints, lights.floats
+    rx, ry, rz = x - lf[k, F_PX], y - lf[k, F_PY], z - lf[k, F_PZ]
+    xl = rx * lf[k, F_RX] + ry * lf[k, F_RY] + rz * lf[k, F_RZ]
+    yl = rx * lf[k, F_UX] + ry * lf[k, F_UY] + rz * lf[k, F_UZ]
+    if li[k, I_KIND] == KIND_SPOT:
+        zl = rx * lf[k, F_DX] + ry * lf[k, F_DY] + rz * lf[k, F_DZ]
+        u, v = spot_cookie_uv(xl, yl, zl, lf[k, F_TAN_HALF])
+    else:
+        u, v = directional_cookie_uv(xl, yl, lf[k, F_CK_SIZE])
+    return sample_texture(lights.cookies, li[k, I_CK_OFF], li[k, I_CK_W], li[k, I_CK_H], li[k, I_CK_WRAP] == 1,
+                          li[k, I_CK_FILTER] == 1, u, v)
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -45,8 +74,10 @@ def light_incidence(lights, k, x, y, z):
     at ``(x, y, z)`` (module docstring).
 
     Works in the float type of ``lights.floats`` and of the point. ``E = 0`` outside the light's volume.
+    The parts (:func:`light_vector`, the distance law, the cone, :func:`cookie_rgb`) are what the physical
+    march evaluates stage by stage over its packets of rays.
     """
-    li, lf, cookies, lut = lights.ints, lights.floats, lights.cookies, lights.lut
+    li, lf = lights.ints, lights.floats
     zero = cast(x, 0.0)
     kind = li[k, I_KIND]
     if kind == KIND_DIRECTIONAL:
@@ -54,31 +85,19 @@ def light_incidence(lights, k, x, y, z):
         e = cast(x, 1.0)
         dist = cast(x, np.inf)
     else:
-        wx, wy, wz = lf[k, F_PX] - x, lf[k, F_PY] - y, lf[k, F_PZ] - z
-        d2 = wx * wx + wy * wy + wz * wz
-        e = distance_attenuation(li[k, I_ATT], d2, lf[k, F_INV_RANGE2], lut)
+        lx, ly, lz, dist, d2 = light_vector(lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ], x, y, z)
+        e = distance_attenuation(li[k, I_ATT], d2, lf[k, F_INV_RANGE2], lights.lut)
         if d2 == zero or e == zero:
             return zero, zero, zero, zero, zero, zero, zero
-        dist = math.sqrt(d2)
-        lx, ly, lz = wx / dist, wy / dist, wz / dist
         if kind == KIND_SPOT:
-            cos_t = -(lx * lf[k, F_DX] + ly * lf[k, F_DY] + lz * lf[k, F_DZ])
-            e *= cone_falloff(li[k, I_CONE], cos_t, lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_HALF_OUTER],
-                              lf[k, F_HALF_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B])
+            e *= cone_falloff(li[k, I_CONE], -(lx * lf[k, F_DX] + ly * lf[k, F_DY] + lz * lf[k, F_DZ]),
+                              lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER],
+                              lf[k, F_UNITY_A], lf[k, F_UNITY_B])
             if e == zero:
                 return lx, ly, lz, dist, zero, zero, zero
     er, eg, eb = e * lf[k, F_CR], e * lf[k, F_CG], e * lf[k, F_CB]
     if li[k, I_CK_OFF] >= 0:
-        rx, ry, rz = x - lf[k, F_PX], y - lf[k, F_PY], z - lf[k, F_PZ]
-        xl = rx * lf[k, F_RX] + ry * lf[k, F_RY] + rz * lf[k, F_RZ]
-        yl = rx * lf[k, F_UX] + ry * lf[k, F_UY] + rz * lf[k, F_UZ]
-        if kind == KIND_SPOT:
-            zl = rx * lf[k, F_DX] + ry * lf[k, F_DY] + rz * lf[k, F_DZ]
-            u, v = spot_cookie_uv(xl, yl, zl, lf[k, F_TAN_HALF])
-        else:
-            u, v = directional_cookie_uv(xl, yl, lf[k, F_CK_SIZE])
-        cr, cg, cb = sample_texture(cookies, li[k, I_CK_OFF], li[k, I_CK_W], li[k, I_CK_H], li[k, I_CK_WRAP] == 1,
-                                    li[k, I_CK_FILTER] == 1, u, v)
+        cr, cg, cb = cookie_rgb(lights, k, x, y, z)
         er, eg, eb = er * cast(x, cr), eg * cast(x, cg), eb * cast(x, cb)
     return lx, ly, lz, dist, er, eg, eb
 

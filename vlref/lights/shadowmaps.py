@@ -57,7 +57,8 @@ from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_H
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
 __all__ = ["ShadowMaps", "ShadowTable", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "apply_strength",
-           "shadow_visibility", "cascade_splits", "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
+           "shadow_visibility", "map_lit", "spot_map_coords", "sample_map",
+           "pcf_taps", "pcf_blend", "cascade_splits", "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
@@ -304,39 +305,54 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
-def _tap(data, tint, base, tbase, res, col, row, d_ref):
-    k = row * res + col
+def _tap(data, tint, base, tbase, k, d_ref):
     lit = 1.0 if d_ref <= data[base + k] else 0.0
     if tbase >= 0 and d_ref > tint[tbase + k, 0]:
         return lit * tint[tbase + k, 1], lit * tint[tbase + k, 2], lit * tint[tbase + k, 3]
     return lit, lit, lit
 
 
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def pcf_taps(u, v, res):
+    """The 2x2 PCF taps around ``(u, v)`` on a ``res``² face: texel offsets ``row · res + col`` (clamped to the
+    edge) ``(k00, k10, k01, k11)`` and bilinear weights ``(w00, w10, w01, w11)``. Scalars only: the march
+    computes them in a vectorised lane loop. The column is clamped to [-1, res] in floating point before the
+    conversion to an integer (the same texels; no integer overflow far outside the map)."""
+    su, sv = u * res - 0.5, v * res - 0.5
+    fu, fv = math.floor(su), math.floor(sv)
+    wu, wv = su - fu, sv - fv
+    edge = float(res)
+    c0, r0 = int(min(max(fu, -1.0), edge)), int(min(max(fv, -1.0), edge))
+    c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
+    r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
+    top, bottom = r0c * res, r1c * res
+    return ((top + c0c, top + c1c, bottom + c0c, bottom + c1c),
+            ((1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv))
+
+
 @njit(cache=True, fastmath=False, forceinline=True)
-def _sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
+def pcf_blend(data, base, k00, k10, k01, k11, w00, w10, w01, w11, d_ref):
+    """The PCF lit fraction of the taps of :func:`pcf_taps` (no transparent layer): ``Σ w [d_ref <= depth]``."""
+    return (w00 * (1.0 if d_ref <= data[base + k00] else 0.0) + w10 * (1.0 if d_ref <= data[base + k10] else 0.0)
+            + w01 * (1.0 if d_ref <= data[base + k01] else 0.0) + w11 * (1.0 if d_ref <= data[base + k11] else 0.0))
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
     """Filtered comparison of one face at (u, v) (row 0 at v = 0 = top). Without a transparent layer
     (``tbase < 0``) r = g = b and the PCF blend is evaluated once."""
     if not pcf:
         col = min(max(int(math.floor(u * res)), 0), res - 1)
         row = min(max(int(math.floor(v * res)), 0), res - 1)
-        return _tap(data, tint, base, tbase, res, col, row, d_ref)
-    su, sv = u * res - 0.5, v * res - 0.5
-    fu, fv = math.floor(su), math.floor(sv)
-    wu, wv = su - fu, sv - fv
-    c0, r0 = int(fu), int(fv)
-    c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
-    r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
-    w00, w10, w01, w11 = (1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv
+        return _tap(data, tint, base, tbase, row * res + col, d_ref)
+    (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
     if tbase < 0:
-        top, bottom = base + r0c * res, base + r1c * res
-        lit = (w00 * (1.0 if d_ref <= data[top + c0c] else 0.0) + w10 * (1.0 if d_ref <= data[top + c1c] else 0.0)
-               + w01 * (1.0 if d_ref <= data[bottom + c0c] else 0.0)
-               + w11 * (1.0 if d_ref <= data[bottom + c1c] else 0.0))
+        lit = pcf_blend(data, base, k00, k10, k01, k11, w00, w10, w01, w11, d_ref)
         return lit, lit, lit
-    a = _tap(data, tint, base, tbase, res, c0c, r0c, d_ref)
-    b = _tap(data, tint, base, tbase, res, c1c, r0c, d_ref)
-    c = _tap(data, tint, base, tbase, res, c0c, r1c, d_ref)
-    d = _tap(data, tint, base, tbase, res, c1c, r1c, d_ref)
+    a = _tap(data, tint, base, tbase, k00, d_ref)
+    b = _tap(data, tint, base, tbase, k10, d_ref)
+    c = _tap(data, tint, base, tbase, k01, d_ref)
+    d = _tap(data, tint, base, tbase, k11, d_ref)
     return (w00 * a[0] + w10 * b[0] + w01 * c[0] + w11 * d[0], w00 * a[1] + w10 * b[1] + w01 * c[1] + w11 * d[1],
             w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
 
@@ -349,6 +365,21 @@ def _cube_face(wx, wy, wz):
     if ay >= az:
         return 2 if wy >= 0 else 3
     return 4 if wz >= 0 else 5
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def spot_map_coords(wx, wy, wz, rx, ry, rz, ux, uy, uz, dx, dy, dz, tan_half):
+    """``(u, v, d_ref, ahead)`` of the point at ``w = x - p`` from a spot light (float64): the map coordinates of
+    its projection (right ``r``, up ``u``, forward ``d`` axes; ``tan_half`` of the cone), the distance the map
+    stores, and whether the point is in front of the light (else ``u = v = 0.5``). Scalars only: the march
+    evaluates it in a vectorised lane loop and looks the map up (:func:`sample_map`) lane by lane."""
+    d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
+    xl = wx * rx + wy * ry + wz * rz
+    yl = wx * ux + wy * uy + wz * uz
+    zl = wx * dx + wy * dy + wz * dz
+    ahead = zl > 0.0
+    k = 0.5 / (zl * tan_half) if ahead else 0.0
+    return 0.5 + xl * k, 0.5 - yl * k, d_ref, ahead
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -376,17 +407,17 @@ def map_lit(shadows, kind, lf, light, x, y, z):
                 v = 0.5 - 0.5 * yl / radius
                 o = base + k * res * res
                 to = tbase + k * res * res if tbase >= 0 else -1
-                return _sample_map(data, tint, o, to, res, pcf, u, v, zl + sm_f[light, j + 4])
+                return sample_map(data, tint, o, to, res, pcf, u, v, zl + sm_f[light, j + 4])
         return 1.0, 1.0, 1.0
-    d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
     if kind == KIND_SPOT:
-        xl = wx * lf[light, F_RX] + wy * lf[light, F_RY] + wz * lf[light, F_RZ]
-        yl = wx * lf[light, F_UX] + wy * lf[light, F_UY] + wz * lf[light, F_UZ]
-        zl = wx * lf[light, F_DX] + wy * lf[light, F_DY] + wz * lf[light, F_DZ]
-        if not zl > 0.0:
+        u, v, d_ref, ahead = spot_map_coords(wx, wy, wz, float(lf[light, F_RX]), float(lf[light, F_RY]),
+                                             float(lf[light, F_RZ]), float(lf[light, F_UX]), float(lf[light, F_UY]),
+                                             float(lf[light, F_UZ]), float(lf[light, F_DX]), float(lf[light, F_DY]),
+                                             float(lf[light, F_DZ]), float(lf[light, F_TAN_HALF]))
+        if not ahead:
             return 1.0, 1.0, 1.0
-        k = 0.5 / (zl * float(lf[light, F_TAN_HALF]))
-        return _sample_map(data, tint, base, tbase, res, pcf, 0.5 + xl * k, 0.5 - yl * k, d_ref)
+        return sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref)
+    d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
     f = _cube_face(wx, wy, wz)
     rx, ry, rz = _CUBE[f, 0, 0], _CUBE[f, 0, 1], _CUBE[f, 0, 2]
     ux, uy, uz = _CUBE[f, 1, 0], _CUBE[f, 1, 1], _CUBE[f, 1, 2]
@@ -397,7 +428,7 @@ def map_lit(shadows, kind, lf, light, x, y, z):
     tc = (wx * ux + wy * uy + wz * uz) / ma
     o = base + f * res * res
     to = tbase + f * res * res if tbase >= 0 else -1
-    return _sample_map(data, tint, o, to, res, pcf, 0.5 + 0.5 * sc, 0.5 - 0.5 * tc, d_ref)
+    return sample_map(data, tint, o, to, res, pcf, 0.5 + 0.5 * sc, 0.5 - 0.5 * tc, d_ref)
 
 
 @njit(cache=True, fastmath=False)

@@ -37,116 +37,312 @@ march is float32 (constants through :func:`vlref.numeric.cast`, the HG value inc
 texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
 its own) and exact shadow rays (the geometry is float64).
 
-Evaluation (the same integral, rearranged for speed): per segment ``e^{-σt Δ}`` is taken as
-``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs (one transcendental, not two) and
-reused while ``σt`` does not change (homogeneous or boxed media: once per segment). In a noiseless
-height fog the fog exponent is linear in the step index, so the factor is ``e^{e_0} q^i`` (one multiply
-per step) unless a sample reaches ``FOG_MAX_EXPONENT``; the leg of a point/spot light in an unbounded
-noiseless fog is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor reused
-for the larger end. These change results by rounding only: at most a few ulp per step (measured
-≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against the per-step ``exp`` form). Shadow-map
-lookups are inlined (:func:`vlref.lights.shadowmaps.map_lit`); exact shadow rays stay out of line.
+Evaluation (the same integral, rearranged for speed): the rays are marched in **packets** of up to
+``LANES`` (pixel, light) pairs that share a light: every pair takes exactly ``N`` steps, so the lanes
+of a packet stay in lockstep. Each step runs as a few *stages*, each a loop over the lanes that reads
+and writes one row per quantity of a per-thread scratch array (structure of arrays): positions,
+medium, the light's direction and distance law, cone, light leg, then phase and accumulation. A stage
+without table lookups or libm calls is vectorised by LLVM (4 lanes per AVX2 instruction, 8 with
+AVX-512); the stages that look things up — shadow maps and shadow rays, cookies, a Unity LUT, noise,
+the ``linear`` cone's ``acos`` — run lane by lane with the scalar helpers. ``exp`` and ``expm1`` are
+:func:`vlref.numeric.exp` / :func:`vlref.numeric.expm1` (≤ 1 / 2 ulp from libm; a libm call would keep
+the loop scalar). Vectorisation never changes a bit: without fast-math LLVM may not reorder
+arithmetic, and each lane computes what a scalar loop would. BENCHMARKS.md "Packets of rays" has the
+measurements.
 
-Determinism: ``prange`` over pixels only, no cross-pixel reduction: the same bits for any thread count.
+In a noiseless height fog the fog exponent is linear in the step index, so the density is ``e^{e_0} q^i``
+(one multiply per step) unless a sample reaches ``FOG_MAX_EXPONENT``; the leg of a point/spot light in an
+unbounded noiseless fog is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor
+reused for the larger end. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral
+needs. These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against
+the per-step ``exp`` form).
+
+Determinism: ``prange`` over tasks of pixels only, no cross-pixel reduction; a lane's arithmetic does
+not depend on the other lanes of its packet: the same bits for any thread count.
 """
 
 from __future__ import annotations
 
-import math
-
+import numpy as np
 from numba import njit, prange
 
-from ..numeric import cast
-from ..lights.pack import I_KIND, KIND_DIRECTIONAL
-from ..lights.shading import light_incidence
-from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, S_MODE, S_STRENGTH, apply_strength, exact_visibility,
-                                 map_lit)
-from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_FOG, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, clip_to_bounds,
-                      density, fog_depth_ratio, fog_exponent, in_bounds, optical_depth)
+from ..lights.attenuation import UNITY, analytic_attenuation, distance_attenuation
+from ..lights.cone import CONE_LINEAR, cone_falloff, cone_polynomial
+from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
+                           F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
+                           F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
+from ..lights.shading import cookie_rgb, light_vector
+from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, S_OFFSET, S_RES, S_STRENGTH,
+                                 apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, sample_map,
+                                 spot_map_coords)
+from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
+                      M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
+                      fog_exponent, height_exponent, optical_depth, smooth_optical_depth)
+from ..numeric import cast, exp, expm1
 from ..phase import hg
 from .segments import light_segment
 
-__all__ = ["march_physical"]
+__all__ = ["march_physical", "LANES", "TASK"]
+
+LANES = 32  # (pixel, light) pairs per packet
+TASK = 4 * LANES  # pixels per prange iteration (its scratch is allocated once per thread)
+
+# rows of the scratch array: row r of the packet is s[r * LANES : (r + 1) * LANES]
+(R_A, R_D, R_B, R_DX, R_DY, R_DZ, R_TRANS, R_FOG, R_FOGQ, R_GEOM, R_X, R_Y, R_Z, R_EA, R_RHO, R_ST, R_SS, R_EM1,
+ R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(34)
+ROWS = 34
+# float64 rows: a spot light's shadow-map coordinates and PCF weights, as map_lit computes them (and the
+# int64 scratch ``taps`` holds the four texel offsets)
+Q_U, Q_V, Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(8)
+QROWS = 8
 
 
-@njit(cache=True, fastmath=False)
-def _march_light(origin, dx, dy, dz, a, b, beta, steps, medium, lights, shadows, geo, k, light_extinction,
-                 leg_steps):
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _at(row, lane):
+    return row * LANES + lane
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _setup(s, m, origin, dx, dy, dz, a, b, beta, steps, medium):
+    """Lane ``m``: the segment ``[a, b]``, its steps, the view transmittance to ``a`` and the fog's running
+    product (module docstring)."""
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
-    zero = cast(ox, 0.0)
-    one = cast(ox, 1.0)
-    lr, lg, lb = zero, zero, zero
-    ss0, st0, g = mp[M_SS], mp[M_ST], mp[M_G]
-    if ss0 == zero:  # nothing scatters
-        return lr, lg, lb
-    lf = lights.floats
-    kind = lights.ints[k, I_KIND]
-    mode = shadows.ints[k, S_MODE]
-    strength = shadows.floats[k, S_STRENGTH]
-    fog, noise = mp[M_FOG] != zero, mp[M_NOISE] != zero
-    leg = light_extinction and st0 != zero and not (kind == KIND_DIRECTIONAL and mp[M_BOUNDED] == zero)
-    # leg of a point/spot light in an unbounded noiseless fog: the closed form of optical_depth with the
-    # sample's own fog factor e^{e_a} reused when it is the larger end (same operations, same bits)
-    leg_fog = leg and fog and not noise and mp[M_BOUNDED] == zero and kind != KIND_DIRECTIONAL
-    trans = math.exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
+    zero, one = cast(ox, 0.0), cast(ox, 1.0)
     delta = (b - a) / cast(ox, steps)
-    st_prev, em1 = zero, zero  # em1 = expm1(-st_prev * delta), reused while st is unchanged
-    # the fog exponent is linear in the step index: e^{e_i} = e^{e_0} q^i while every sample's exponent
-    # lies in (-cap, cap) (no cap reached, no underflow of the running product)
+    s[_at(R_A, m)], s[_at(R_D, m)], s[_at(R_B, m)] = a, delta, beta
+    s[_at(R_DX, m)], s[_at(R_DY, m)], s[_at(R_DZ, m)] = dx, dy, dz
+    s[_at(R_TRANS, m)] = exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
     e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
     e_last = fog_exponent(mp, oy + (a + (cast(ox, steps - 1) + beta) * delta) * dy)
     cap = cast(ox, FOG_MAX_EXPONENT)
-    geometric = fog and not noise and max(e_first, e_last) < cap and min(e_first, e_last) > -cap
-    fog_i = math.exp(e_first) if geometric else one
-    fog_q = math.exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
-    for i in range(steps):
-        t = a + (cast(ox, i) + beta) * delta
-        x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
-        ea = fog_exponent(mp, y) if fog else zero
-        if noise:
-            rho = density(mp, lattice, x, y, z)
-        elif not in_bounds(mp, x, y, z):
-            rho = zero
-        elif geometric:
-            rho = fog_i
-        else:
-            rho = math.exp(ea) if fog else one
-        fog_i *= fog_q
+    geometric = (mp[M_FOG] != zero and mp[M_NOISE] == zero and max(e_first, e_last) < cap
+                 and min(e_first, e_last) > -cap)
+    s[_at(R_GEOM, m)] = one if geometric else zero
+    s[_at(R_FOG, m)] = exp(e_first) if geometric else one
+    s[_at(R_FOGQ, m)] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
+    s[_at(R_AR, m)] = s[_at(R_AG, m)] = s[_at(R_AB, m)] = zero
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _medium_stage(s, n, i, origin, medium):
+    """Sample positions ``x = o + t d``, ``t = a + (i + β) Δ``; density, ``σs``, ``σt``, ``expm1(-σt Δ)``.
+    The vectorised loops read only scalars and ``s`` (an array read inside a lane loop costs reference
+    counting calls, which keep the loop scalar)."""
+    mp, lattice = medium.params, medium.noise
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    zero, one = cast(ox, 0.0), cast(ox, 1.0)
+    fog, noise, bounded = mp[M_FOG] != zero, mp[M_NOISE] != zero, mp[M_BOUNDED] != zero
+    base, falloff = mp[M_FOG_BASE], mp[M_FOG_K]
+    x0, y0, z0, x1, y1, z1 = mp[M_BX0], mp[M_BY0], mp[M_BZ0], mp[M_BX1], mp[M_BY1], mp[M_BZ1]
+    ss0, st0 = mp[M_SS], mp[M_ST]
+    fi = cast(ox, i)
+    for m in range(n):
+        t = s[_at(R_A, m)] + (fi + s[_at(R_B, m)]) * s[_at(R_D, m)]
+        x, y, z = ox + t * s[_at(R_DX, m)], oy + t * s[_at(R_DY, m)], oz + t * s[_at(R_DZ, m)]
+        s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)] = x, y, z
+        s[_at(R_EA, m)] = height_exponent(base, falloff, y) if fog else zero
+    if noise:
+        for m in range(n):
+            s[_at(R_RHO, m)] = density(mp, lattice, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
+    else:  # smooth_density, with the fog's running product where it holds (on every lane: no exp at all)
+        geometric = True
+        for m in range(n):
+            geometric = geometric and s[_at(R_GEOM, m)] != zero
+        for m in range(n):
+            inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, s[_at(R_X, m)], s[_at(R_Y, m)],
+                                                 s[_at(R_Z, m)])
+            running = s[_at(R_FOG, m)]
+            if geometric:
+                rho = running
+            else:
+                rho = running if s[_at(R_GEOM, m)] != zero else (exp(s[_at(R_EA, m)]) if fog else one)
+            s[_at(R_RHO, m)] = rho if inside else zero
+            s[_at(R_FOG, m)] = running * s[_at(R_FOGQ, m)]
+    for m in range(n):
+        rho = s[_at(R_RHO, m)]
         st = st0 * rho
-        ss = ss0 * rho
-        if st != st_prev:
-            em1 = math.expm1(-st * delta)
-            st_prev = st
-        if ss > zero:
-            lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
-            if er + eg + eb > zero:
-                vr, vg, vb = one, one, one
-                if mode == SHADOW_EXACT:
-                    fr, fg, fb = exact_visibility(geo, kind, lf, k, float(x), float(y), float(z))
-                elif mode != SHADOW_NONE:
-                    fr, fg, fb = map_lit(shadows, kind, lf, k, float(x), float(y), float(z))
-                if mode != SHADOW_NONE:
-                    fr, fg, fb = apply_strength(strength, fr, fg, fb)
-                    vr, vg, vb = cast(ox, fr), cast(ox, fg), cast(ox, fb)
-                tl = one
-                if leg_fog:
-                    el = fog_exponent(mp, y + dist * ly)
-                    top = rho if ea >= el else math.exp(el)
-                    tl = math.exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
-                elif leg:
-                    tl = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, dist, leg_steps))
-                phase = cast(ox, hg(dx * lx + dy * ly + dz * lz, g))
-                s_int = delta if st == zero else -em1 / st
-                f = trans * ss * phase * tl * s_int
-                lr += f * er * vr
-                lg += f * eg * vg
-                lb += f * eb * vb
-        trans *= one + em1
-    return lr, lg, lb
+        s[_at(R_ST, m)], s[_at(R_SS, m)] = st, ss0 * rho
+        s[_at(R_EM1, m)] = expm1(-st * s[_at(R_D, m)])
 
 
-@njit(cache=True, fastmath=False, parallel=True)
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _light_stage(s, n, lights, k):
+    """Direction ``l`` toward light ``k``, distance and ``E`` without colour: distance law × cone (0 at the
+    light's own position), then ``E`` per channel with the colour and the cookie."""
+    li, lf = lights.ints, lights.floats
+    kind, law, cone = li[k, I_KIND], li[k, I_ATT], li[k, I_CONE]
+    zero, one = cast(lf[0, 0], 0.0), cast(lf[0, 0], 1.0)
+    if kind == KIND_DIRECTIONAL:
+        for m in range(n):
+            s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)] = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
+            s[_at(R_DIST, m)] = cast(one, np.inf)
+            s[_at(R_E, m)] = one
+    else:
+        inv_r2 = lf[k, F_INV_RANGE2]
+        px, py, pz = lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ]
+        for m in range(n):
+            lx, ly, lz, dist, d2 = light_vector(px, py, pz, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
+            s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], s[_at(R_DIST, m)], s[_at(R_D2, m)] = lx, ly, lz, dist, d2
+        if law == UNITY and lights.lut.size > 0:
+            for m in range(n):
+                s[_at(R_E, m)] = distance_attenuation(law, s[_at(R_D2, m)], inv_r2, lights.lut)
+        else:
+            for m in range(n):
+                s[_at(R_E, m)] = analytic_attenuation(law, s[_at(R_D2, m)], inv_r2)
+        for m in range(n):
+            s[_at(R_E, m)] = s[_at(R_E, m)] if s[_at(R_D2, m)] != zero else zero
+        if kind == KIND_SPOT:
+            ax, ay, az = lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ]
+            co, ci, ua, ub = lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B]
+            if cone == CONE_LINEAR:
+                for m in range(n):
+                    cos_t = -(s[_at(R_LX, m)] * ax + s[_at(R_LY, m)] * ay + s[_at(R_LZ, m)] * az)
+                    s[_at(R_E, m)] *= cone_falloff(cone, cos_t, co, ci, lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER],
+                                                   ua, ub)
+            else:
+                for m in range(n):
+                    cos_t = -(s[_at(R_LX, m)] * ax + s[_at(R_LY, m)] * ay + s[_at(R_LZ, m)] * az)
+                    s[_at(R_E, m)] *= cone_polynomial(cone, cos_t, co, ci, ua, ub)
+    cr, cg, cb = lf[k, F_CR], lf[k, F_CG], lf[k, F_CB]
+    for m in range(n):
+        e = s[_at(R_E, m)]
+        s[_at(R_ER, m)], s[_at(R_EG, m)], s[_at(R_EB, m)] = e * cr, e * cg, e * cb
+    if li[k, I_CK_OFF] >= 0:
+        for m in range(n):
+            if s[_at(R_E, m)] != zero:
+                r, g, b = cookie_rgb(lights, k, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
+                s[_at(R_ER, m)] *= cast(one, r)
+                s[_at(R_EG, m)] *= cast(one, g)
+                s[_at(R_EB, m)] *= cast(one, b)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
+    """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form, the analytic
+    :func:`~vlref.medium.smooth_optical_depth`, or the noise's sub-steps."""
+    mp, lattice = medium.params, medium.noise
+    zero, one = cast(mp[0], 0.0), cast(mp[0], 1.0)
+    st0 = mp[M_ST]
+    bounded, noise = mp[M_BOUNDED] != zero, mp[M_NOISE] != zero
+    if not light_extinction or st0 == zero or (kind == KIND_DIRECTIONAL and not bounded):
+        for m in range(n):
+            s[_at(R_TL, m)] = one
+    elif mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
+        el = height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], light_y)  # the leg ends at the light
+        fog_l = exp(el)
+        for m in range(n):
+            dist, ea, rho = s[_at(R_DIST, m)], s[_at(R_EA, m)], s[_at(R_RHO, m)]
+            top = rho if ea >= el else fog_l
+            s[_at(R_TL, m)] = exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
+    elif not noise:
+        for m in range(n):
+            s[_at(R_TL, m)] = exp(-smooth_optical_depth(mp, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)],
+                                                        s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], zero,
+                                                        s[_at(R_DIST, m)]))
+    else:
+        for m in range(n):
+            s[_at(R_TL, m)] = exp(-optical_depth(mp, lattice, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)],
+                                                 s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], zero,
+                                                 s[_at(R_DIST, m)], leg_steps))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
+    """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
+    light's map coordinates are computed in a vectorised loop (float64 rows of ``q``), its taps lane by lane."""
+    kind = lights.ints[k, I_KIND]
+    mode = shadows.ints[k, S_MODE]
+    strength = shadows.floats[k, S_STRENGTH]
+    zero, one = cast(lights.floats[0, 0], 0.0), cast(lights.floats[0, 0], 1.0)
+    for m in range(n):
+        s[_at(R_VR, m)] = s[_at(R_VG, m)] = s[_at(R_VB, m)] = one
+    if mode == SHADOW_NONE:
+        return
+    lf = lights.floats
+    if kind == KIND_SPOT and mode != SHADOW_EXACT:
+        px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
+        rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
+        ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
+        dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
+        tan_half = float(lf[k, F_TAN_HALF])
+        sm_i, data, tint = shadows.ints, shadows.data, shadows.tint
+        res, base = sm_i[k, S_RES], sm_i[k, S_OFFSET]
+        tbase = base if tint.shape[0] > 0 else -1
+        pcf = mode == SHADOW_PCF
+        for m in range(n):
+            u, v, d_ref, ahead = spot_map_coords(float(s[_at(R_X, m)]) - px, float(s[_at(R_Y, m)]) - py,
+                                                 float(s[_at(R_Z, m)]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
+                                                 tan_half)
+            (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
+            q[_at(Q_U, m)], q[_at(Q_V, m)], q[_at(Q_DREF, m)] = u, v, d_ref
+            q[_at(Q_AHEAD, m)] = 1.0 if ahead else 0.0
+            q[_at(Q_W00, m)], q[_at(Q_W10, m)], q[_at(Q_W01, m)], q[_at(Q_W11, m)] = w00, w10, w01, w11
+            taps[_at(0, m)], taps[_at(1, m)], taps[_at(2, m)], taps[_at(3, m)] = k00, k10, k01, k11
+        for m in range(n):
+            if (q[_at(Q_AHEAD, m)] != 0.0 and s[_at(R_SS, m)] > zero
+                    and s[_at(R_ER, m)] + s[_at(R_EG, m)] + s[_at(R_EB, m)] > zero):
+                if pcf and tbase < 0:
+                    lit = pcf_blend(data, base, taps[_at(0, m)], taps[_at(1, m)], taps[_at(2, m)], taps[_at(3, m)],
+                                    q[_at(Q_W00, m)], q[_at(Q_W10, m)], q[_at(Q_W01, m)], q[_at(Q_W11, m)],
+                                    q[_at(Q_DREF, m)])
+                    fr, fg, fb = lit, lit, lit
+                else:
+                    fr, fg, fb = sample_map(data, tint, base, tbase, res, pcf, q[_at(Q_U, m)], q[_at(Q_V, m)],
+                                            q[_at(Q_DREF, m)])
+                fr, fg, fb = apply_strength(strength, fr, fg, fb)
+                s[_at(R_VR, m)], s[_at(R_VG, m)], s[_at(R_VB, m)] = cast(one, fr), cast(one, fg), cast(one, fb)
+        return
+    for m in range(n):
+        if s[_at(R_SS, m)] > zero and s[_at(R_ER, m)] + s[_at(R_EG, m)] + s[_at(R_EB, m)] > zero:
+            x, y, z = float(s[_at(R_X, m)]), float(s[_at(R_Y, m)]), float(s[_at(R_Z, m)])
+            if mode == SHADOW_EXACT:
+                fr, fg, fb = exact_visibility(geo, kind, lf, k, x, y, z)
+            else:
+                fr, fg, fb = map_lit(shadows, kind, lf, k, x, y, z)
+            fr, fg, fb = apply_strength(strength, fr, fg, fb)
+            s[_at(R_VR, m)], s[_at(R_VG, m)], s[_at(R_VB, m)] = cast(one, fr), cast(one, fg), cast(one, fb)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _accumulate_stage(s, n, g):
+    """``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then ``T *= e^{-σt Δ}`` (module docstring)."""
+    zero, one = cast(g, 0.0), cast(g, 1.0)
+    for m in range(n):
+        st, ss, em1, delta = s[_at(R_ST, m)], s[_at(R_SS, m)], s[_at(R_EM1, m)], s[_at(R_D, m)]
+        er, eg, eb = s[_at(R_ER, m)], s[_at(R_EG, m)], s[_at(R_EB, m)]
+        cos_t = s[_at(R_DX, m)] * s[_at(R_LX, m)] + s[_at(R_DY, m)] * s[_at(R_LY, m)] + s[_at(R_DZ, m)] * s[_at(R_LZ, m)]
+        phase = cast(g, hg(cos_t, g))
+        s_int = delta if st == zero else -em1 / st
+        f = s[_at(R_TRANS, m)] * ss * phase * s[_at(R_TL, m)] * s_int
+        lit = ss > zero and er + eg + eb > zero
+        s[_at(R_AR, m)] += f * er * s[_at(R_VR, m)] if lit else zero
+        s[_at(R_AG, m)] += f * eg * s[_at(R_VG, m)] if lit else zero
+        s[_at(R_AB, m)] += f * eb * s[_at(R_VB, m)] if lit else zero
+        s[_at(R_TRANS, m)] *= one + em1
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction, leg_steps,
+                  per_light):
+    """March the ``n`` lanes set up in ``s`` (pixels ``pix``, image width ``w``) through light ``k`` and store
+    their in-scattered radiance in ``per_light[k]`` (module docstring)."""
+    kind = lights.ints[k, I_KIND]
+    light_y = lights.floats[k, F_PY]
+    g = medium.params[M_G]
+    for i in range(steps):
+        _medium_stage(s, n, i, origin, medium)
+        _light_stage(s, n, lights, k)
+        _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps)
+        _shadow_stage(s, q, taps, n, shadows, geo, lights, k)
+        _accumulate_stage(s, n, g)
+    for m in range(n):
+        i, j = pix[m] // w, pix[m] % w
+        per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = (s[_at(R_AR, m)], s[_at(R_AG, m)],
+                                                                                 s[_at(R_AB, m)])
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
                    per_light, transmittance):
     """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
@@ -154,24 +350,44 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
     (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
-    ``geo`` the geometry tuple (exact shadows).
+    ``geo`` the geometry tuple (exact shadows). Work is split in tasks of ``TASK`` pixels, each marched in
+    packets of up to ``LANES`` (pixel, light) pairs with a non-empty segment.
     """
     mp, lattice = medium.params, medium.noise
+    ox, oy, oz = origin[0], origin[1], origin[2]
     h, w = t_end.shape
-    n = lights.ints.shape[0]
-    for p in prange(h * w):
-        i, j = p // w, p % w
-        dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
-        te = t_end[i, j]
-        transmittance[i, j] = math.exp(-optical_depth(mp, lattice, origin[0], origin[1], origin[2], dx, dy, dz,
-                                                      cast(te, 0.0), te, steps))
-        for k in range(n):
-            a, b = light_segment(lights, k, origin[0], origin[1], origin[2], dx, dy, dz, te)
-            if b > a:
-                a, b = clip_to_bounds(mp, origin[0], origin[1], origin[2], dx, dy, dz, a, b)
-            if b <= a:
-                per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = cast(te, 0.0)
-                continue
-            r, g, bl = _march_light(origin, dx, dy, dz, a, b, offsets[i, j], steps, medium, lights, shadows, geo, k,
-                                    light_extinction, leg_steps)
-            per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = r, g, bl
+    n_lights = lights.ints.shape[0]
+    n_tasks = (h * w + TASK - 1) // TASK
+    zero = cast(ox, 0.0)
+    for task in prange(n_tasks):
+        s = np.empty(ROWS * LANES, dtype=t_end.dtype)
+        q = np.empty(QROWS * LANES, dtype=np.float64)
+        taps = np.empty(4 * LANES, dtype=np.int64)
+        pix = np.empty(LANES, dtype=np.int64)
+        p_end = min(h * w, (task + 1) * TASK)
+        for p in range(task * TASK, p_end):
+            i, j = p // w, p % w
+            te = t_end[i, j]
+            transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
+                                                     dirs[i, j, 2], zero, te, steps))
+        for k in range(n_lights):
+            n = 0
+            for p in range(task * TASK, p_end):
+                i, j = p // w, p % w
+                dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
+                a, b = light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end[i, j])
+                if b > a:
+                    a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, a, b)
+                if b <= a:
+                    per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = zero
+                    continue
+                _setup(s, n, origin, dx, dy, dz, a, b, offsets[i, j], steps, medium)
+                pix[n] = p
+                n += 1
+                if n == LANES:
+                    _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
+                                  leg_steps, per_light)
+                    n = 0
+            if n > 0:
+                _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
+                              leg_steps, per_light)

@@ -1,0 +1,72 @@
+"""vlref.numeric: ``exp`` and ``expm1`` written for vectorised lane loops, against libm (NumPy's ``exp`` /
+``expm1``), and ``cast``."""
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, strategies as st
+from numba import njit
+
+from vlref.numeric import cast, exp, expm1
+
+
+@njit(cache=True)
+def _both(xs, e, em1):
+    for i in range(xs.size):
+        e[i] = exp(xs[i])
+        em1[i] = expm1(xs[i])
+
+
+def _ulp(got, ref):
+    return np.abs(got - ref) / np.spacing(np.abs(ref))
+
+
+@pytest.mark.parametrize("lo, hi", [(-1e-9, 1e-9), (-0.4, 0.4), (-1.0, 1.0), (-40.0, 40.0), (-700.0, 700.0)])
+def test_within_one_ulp_of_libm_for_exp_and_two_for_expm1(lo, hi):
+    xs = np.random.default_rng(7).uniform(lo, hi, 200_000)
+    e, em1 = np.empty_like(xs), np.empty_like(xs)
+    _both(xs, e, em1)
+    assert _ulp(e, np.exp(xs)).max() <= 1.0
+    assert _ulp(em1, np.expm1(xs)).max() <= 2.0
+
+
+@given(st.floats(-708.0, 709.0))
+def test_any_argument_in_range(x):
+    assert abs(exp(x) - math.exp(x)) <= np.spacing(math.exp(x))
+    assert abs(expm1(x) - math.expm1(x)) <= 2 * np.spacing(abs(math.expm1(x)))
+
+
+def test_small_arguments_keep_their_relative_accuracy():
+    xs = np.array([1e-300, -1e-300, 1e-17, -3e-12, 2.5e-8, -0.34])
+    e, em1 = np.empty_like(xs), np.empty_like(xs)
+    _both(xs, e, em1)
+    assert np.all(_ulp(em1, np.expm1(xs)) <= 1.0)
+
+
+def test_edges_zero_overflow_underflow_and_nan():
+    xs = np.array([0.0, -800.0, 800.0, -708.5, math.inf, -math.inf, math.nan])
+    e, em1 = np.empty_like(xs), np.empty_like(xs)
+    _both(xs, e, em1)
+    assert e[0] == 1.0 and em1[0] == 0.0
+    assert e[1] == 0.0 and em1[1] == -1.0
+    assert e[2] == math.inf and em1[2] == math.inf
+    assert e[3] == 0.0 and em1[3] == -1.0  # below 2^-1022: flushed
+    assert e[4] == math.inf and e[5] == 0.0 and em1[5] == -1.0
+    assert math.isnan(e[6]) and math.isnan(em1[6])
+
+
+def test_float32_arguments_give_the_rounded_float64_value():
+    xs = np.random.default_rng(3).uniform(-80.0, 80.0, 20_000).astype(np.float32)
+    e, em1 = np.empty_like(xs), np.empty_like(xs)
+    _both(xs, e, em1)
+    assert e.dtype == np.float32
+    x64 = xs.astype(np.float64)
+    assert _ulp(e, np.exp(x64).astype(np.float32)).max() <= 1.0
+    assert _ulp(em1, np.expm1(x64).astype(np.float32)).max() <= 1.0
+    assert np.mean(e == np.exp(x64).astype(np.float32)) > 0.999
+
+
+def test_cast_keeps_the_float_type():
+    assert cast(np.float32(1.0), 2.5) == np.float32(2.5) and isinstance(cast(np.float32(1.0), 2.5), np.float32)
+    assert isinstance(cast(1.0, 2), float)
