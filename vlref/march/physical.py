@@ -87,19 +87,16 @@ __all__ = ["march_physical", "LANES", "TASK"]
 LANES = 32  # (pixel, light) pairs per packet
 TASK = 4 * LANES  # pixels per prange iteration (its scratch is allocated once per thread)
 
-# rows of the scratch array: row r of the packet is s[r * LANES : (r + 1) * LANES]
-(R_A, R_D, R_B, R_DX, R_DY, R_DZ, R_TRANS, R_FOG, R_FOGQ, R_GEOM, R_X, R_Y, R_Z, R_EA, R_RHO, R_ST, R_SS, R_EM1,
- R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(34)
+# offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM
+# sees every row apart and vectorises without run-time alias checks)
 ROWS = 34
+(R_A, R_D, R_B, R_DX, R_DY, R_DZ, R_TRANS, R_FOG, R_FOGQ, R_GEOM, R_X, R_Y, R_Z, R_EA, R_RHO, R_ST, R_SS, R_EM1,
+ R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(0, ROWS * LANES,
+                                                                                                        LANES)
 # float64 rows: a spot light's shadow-map coordinates and PCF weights, as map_lit computes them (and the
 # int64 scratch ``taps`` holds the four texel offsets)
-Q_U, Q_V, Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(8)
 QROWS = 8
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def _at(row, lane):
-    return row * LANES + lane
+Q_U, Q_V, Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(0, QROWS * LANES, LANES)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
@@ -110,21 +107,21 @@ def _setup(s, m, origin, dx, dy, dz, a, b, beta, steps, medium):
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero, one = cast(ox, 0.0), cast(ox, 1.0)
     delta = (b - a) / cast(ox, steps)
-    s[_at(R_A, m)], s[_at(R_D, m)], s[_at(R_B, m)] = a, delta, beta
-    s[_at(R_DX, m)], s[_at(R_DY, m)], s[_at(R_DZ, m)] = dx, dy, dz
-    s[_at(R_TRANS, m)] = exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
+    s[R_A + m], s[R_D + m], s[R_B + m] = a, delta, beta
+    s[R_DX + m], s[R_DY + m], s[R_DZ + m] = dx, dy, dz
+    s[R_TRANS + m] = exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
     e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
     e_last = fog_exponent(mp, oy + (a + (cast(ox, steps - 1) + beta) * delta) * dy)
     cap = cast(ox, FOG_MAX_EXPONENT)
     geometric = (mp[M_FOG] != zero and mp[M_NOISE] == zero and max(e_first, e_last) < cap
                  and min(e_first, e_last) > -cap)
-    s[_at(R_GEOM, m)] = one if geometric else zero
-    s[_at(R_FOG, m)] = exp(e_first) if geometric else one
-    s[_at(R_FOGQ, m)] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
-    s[_at(R_AR, m)] = s[_at(R_AG, m)] = s[_at(R_AB, m)] = zero
+    s[R_GEOM + m] = one if geometric else zero
+    s[R_FOG + m] = exp(e_first) if geometric else one
+    s[R_FOGQ + m] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
+    s[R_AR + m] = s[R_AG + m] = s[R_AB + m] = zero
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _medium_stage(s, n, i, origin, medium):
     """Sample positions ``x = o + t d``, ``t = a + (i + β) Δ``; density, ``σs``, ``σt``, ``expm1(-σt Δ)``.
     The vectorised loops read only scalars and ``s`` (an array read inside a lane loop costs reference
@@ -138,35 +135,35 @@ def _medium_stage(s, n, i, origin, medium):
     ss0, st0 = mp[M_SS], mp[M_ST]
     fi = cast(ox, i)
     for m in range(n):
-        t = s[_at(R_A, m)] + (fi + s[_at(R_B, m)]) * s[_at(R_D, m)]
-        x, y, z = ox + t * s[_at(R_DX, m)], oy + t * s[_at(R_DY, m)], oz + t * s[_at(R_DZ, m)]
-        s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)] = x, y, z
-        s[_at(R_EA, m)] = height_exponent(base, falloff, y) if fog else zero
+        t = s[R_A + m] + (fi + s[R_B + m]) * s[R_D + m]
+        x, y, z = ox + t * s[R_DX + m], oy + t * s[R_DY + m], oz + t * s[R_DZ + m]
+        s[R_X + m], s[R_Y + m], s[R_Z + m] = x, y, z
+        s[R_EA + m] = height_exponent(base, falloff, y) if fog else zero
     if noise:
         for m in range(n):
-            s[_at(R_RHO, m)] = density(mp, lattice, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
+            s[R_RHO + m] = density(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m])
     else:  # smooth_density, with the fog's running product where it holds (on every lane: no exp at all)
         geometric = True
         for m in range(n):
-            geometric = geometric and s[_at(R_GEOM, m)] != zero
+            geometric = geometric and s[R_GEOM + m] != zero
         for m in range(n):
-            inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, s[_at(R_X, m)], s[_at(R_Y, m)],
-                                                 s[_at(R_Z, m)])
-            running = s[_at(R_FOG, m)]
+            inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, s[R_X + m], s[R_Y + m],
+                                                 s[R_Z + m])
+            running = s[R_FOG + m]
             if geometric:
                 rho = running
             else:
-                rho = running if s[_at(R_GEOM, m)] != zero else (exp(s[_at(R_EA, m)]) if fog else one)
-            s[_at(R_RHO, m)] = rho if inside else zero
-            s[_at(R_FOG, m)] = running * s[_at(R_FOGQ, m)]
+                rho = running if s[R_GEOM + m] != zero else (exp(s[R_EA + m]) if fog else one)
+            s[R_RHO + m] = rho if inside else zero
+            s[R_FOG + m] = running * s[R_FOGQ + m]
     for m in range(n):
-        rho = s[_at(R_RHO, m)]
+        rho = s[R_RHO + m]
         st = st0 * rho
-        s[_at(R_ST, m)], s[_at(R_SS, m)] = st, ss0 * rho
-        s[_at(R_EM1, m)] = expm1(-st * s[_at(R_D, m)])
+        s[R_ST + m], s[R_SS + m] = st, ss0 * rho
+        s[R_EM1 + m] = expm1(-st * s[R_D + m])
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _light_stage(s, n, lights, k):
     """Direction ``l`` toward light ``k``, distance and ``E`` without colour: distance law × cone (0 at the
     light's own position), then ``E`` per channel with the colour and the cookie."""
@@ -175,49 +172,49 @@ def _light_stage(s, n, lights, k):
     zero, one = cast(lf[0, 0], 0.0), cast(lf[0, 0], 1.0)
     if kind == KIND_DIRECTIONAL:
         for m in range(n):
-            s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)] = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
-            s[_at(R_DIST, m)] = cast(one, np.inf)
-            s[_at(R_E, m)] = one
+            s[R_LX + m], s[R_LY + m], s[R_LZ + m] = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
+            s[R_DIST + m] = cast(one, np.inf)
+            s[R_E + m] = one
     else:
         inv_r2 = lf[k, F_INV_RANGE2]
         px, py, pz = lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ]
         for m in range(n):
-            lx, ly, lz, dist, d2 = light_vector(px, py, pz, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
-            s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], s[_at(R_DIST, m)], s[_at(R_D2, m)] = lx, ly, lz, dist, d2
+            lx, ly, lz, dist, d2 = light_vector(px, py, pz, s[R_X + m], s[R_Y + m], s[R_Z + m])
+            s[R_LX + m], s[R_LY + m], s[R_LZ + m], s[R_DIST + m], s[R_D2 + m] = lx, ly, lz, dist, d2
         if law == UNITY and lights.lut.size > 0:
             for m in range(n):
-                s[_at(R_E, m)] = distance_attenuation(law, s[_at(R_D2, m)], inv_r2, lights.lut)
+                s[R_E + m] = distance_attenuation(law, s[R_D2 + m], inv_r2, lights.lut)
         else:
             for m in range(n):
-                s[_at(R_E, m)] = analytic_attenuation(law, s[_at(R_D2, m)], inv_r2)
+                s[R_E + m] = analytic_attenuation(law, s[R_D2 + m], inv_r2)
         for m in range(n):
-            s[_at(R_E, m)] = s[_at(R_E, m)] if s[_at(R_D2, m)] != zero else zero
+            s[R_E + m] = s[R_E + m] if s[R_D2 + m] != zero else zero
         if kind == KIND_SPOT:
             ax, ay, az = lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ]
             co, ci, ua, ub = lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B]
             if cone == CONE_LINEAR:
                 for m in range(n):
-                    cos_t = -(s[_at(R_LX, m)] * ax + s[_at(R_LY, m)] * ay + s[_at(R_LZ, m)] * az)
-                    s[_at(R_E, m)] *= cone_falloff(cone, cos_t, co, ci, lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER],
+                    cos_t = -(s[R_LX + m] * ax + s[R_LY + m] * ay + s[R_LZ + m] * az)
+                    s[R_E + m] *= cone_falloff(cone, cos_t, co, ci, lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER],
                                                    ua, ub)
             else:
                 for m in range(n):
-                    cos_t = -(s[_at(R_LX, m)] * ax + s[_at(R_LY, m)] * ay + s[_at(R_LZ, m)] * az)
-                    s[_at(R_E, m)] *= cone_polynomial(cone, cos_t, co, ci, ua, ub)
+                    cos_t = -(s[R_LX + m] * ax + s[R_LY + m] * ay + s[R_LZ + m] * az)
+                    s[R_E + m] *= cone_polynomial(cone, cos_t, co, ci, ua, ub)
     cr, cg, cb = lf[k, F_CR], lf[k, F_CG], lf[k, F_CB]
     for m in range(n):
-        e = s[_at(R_E, m)]
-        s[_at(R_ER, m)], s[_at(R_EG, m)], s[_at(R_EB, m)] = e * cr, e * cg, e * cb
+        e = s[R_E + m]
+        s[R_ER + m], s[R_EG + m], s[R_EB + m] = e * cr, e * cg, e * cb
     if li[k, I_CK_OFF] >= 0:
         for m in range(n):
-            if s[_at(R_E, m)] != zero:
-                r, g, b = cookie_rgb(lights, k, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)])
-                s[_at(R_ER, m)] *= cast(one, r)
-                s[_at(R_EG, m)] *= cast(one, g)
-                s[_at(R_EB, m)] *= cast(one, b)
+            if s[R_E + m] != zero:
+                r, g, b = cookie_rgb(lights, k, s[R_X + m], s[R_Y + m], s[R_Z + m])
+                s[R_ER + m] *= cast(one, r)
+                s[R_EG + m] *= cast(one, g)
+                s[R_EB + m] *= cast(one, b)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
     """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form, the analytic
     :func:`~vlref.medium.smooth_optical_depth`, or the noise's sub-steps."""
@@ -227,27 +224,27 @@ def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
     bounded, noise = mp[M_BOUNDED] != zero, mp[M_NOISE] != zero
     if not light_extinction or st0 == zero or (kind == KIND_DIRECTIONAL and not bounded):
         for m in range(n):
-            s[_at(R_TL, m)] = one
+            s[R_TL + m] = one
     elif mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
         el = height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], light_y)  # the leg ends at the light
         fog_l = exp(el)
         for m in range(n):
-            dist, ea, rho = s[_at(R_DIST, m)], s[_at(R_EA, m)], s[_at(R_RHO, m)]
+            dist, ea, rho = s[R_DIST + m], s[R_EA + m], s[R_RHO + m]
             top = rho if ea >= el else fog_l
-            s[_at(R_TL, m)] = exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
+            s[R_TL + m] = exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
     elif not noise:
         for m in range(n):
-            s[_at(R_TL, m)] = exp(-smooth_optical_depth(mp, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)],
-                                                        s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], zero,
-                                                        s[_at(R_DIST, m)]))
+            s[R_TL + m] = exp(-smooth_optical_depth(mp, s[R_X + m], s[R_Y + m], s[R_Z + m],
+                                                        s[R_LX + m], s[R_LY + m], s[R_LZ + m], zero,
+                                                        s[R_DIST + m]))
     else:
         for m in range(n):
-            s[_at(R_TL, m)] = exp(-optical_depth(mp, lattice, s[_at(R_X, m)], s[_at(R_Y, m)], s[_at(R_Z, m)],
-                                                 s[_at(R_LX, m)], s[_at(R_LY, m)], s[_at(R_LZ, m)], zero,
-                                                 s[_at(R_DIST, m)], leg_steps))
+            s[R_TL + m] = exp(-optical_depth(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m],
+                                                 s[R_LX + m], s[R_LY + m], s[R_LZ + m], zero,
+                                                 s[R_DIST + m], leg_steps))
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
     light's map coordinates are computed in a vectorised loop (float64 rows of ``q``), its taps lane by lane."""
@@ -256,7 +253,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     strength = shadows.floats[k, S_STRENGTH]
     zero, one = cast(lights.floats[0, 0], 0.0), cast(lights.floats[0, 0], 1.0)
     for m in range(n):
-        s[_at(R_VR, m)] = s[_at(R_VG, m)] = s[_at(R_VB, m)] = one
+        s[R_VR + m] = s[R_VG + m] = s[R_VB + m] = one
     if mode == SHADOW_NONE:
         return
     lf = lights.floats
@@ -271,55 +268,55 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
         tbase = base if tint.shape[0] > 0 else -1
         pcf = mode == SHADOW_PCF
         for m in range(n):
-            u, v, d_ref, ahead = spot_map_coords(float(s[_at(R_X, m)]) - px, float(s[_at(R_Y, m)]) - py,
-                                                 float(s[_at(R_Z, m)]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
+            u, v, d_ref, ahead = spot_map_coords(float(s[R_X + m]) - px, float(s[R_Y + m]) - py,
+                                                 float(s[R_Z + m]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
                                                  tan_half)
             (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
-            q[_at(Q_U, m)], q[_at(Q_V, m)], q[_at(Q_DREF, m)] = u, v, d_ref
-            q[_at(Q_AHEAD, m)] = 1.0 if ahead else 0.0
-            q[_at(Q_W00, m)], q[_at(Q_W10, m)], q[_at(Q_W01, m)], q[_at(Q_W11, m)] = w00, w10, w01, w11
-            taps[_at(0, m)], taps[_at(1, m)], taps[_at(2, m)], taps[_at(3, m)] = k00, k10, k01, k11
+            q[Q_U + m], q[Q_V + m], q[Q_DREF + m] = u, v, d_ref
+            q[Q_AHEAD + m] = 1.0 if ahead else 0.0
+            q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m] = w00, w10, w01, w11
+            taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m] = k00, k10, k01, k11
         for m in range(n):
-            if (q[_at(Q_AHEAD, m)] != 0.0 and s[_at(R_SS, m)] > zero
-                    and s[_at(R_ER, m)] + s[_at(R_EG, m)] + s[_at(R_EB, m)] > zero):
+            if (q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero
+                    and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero):
                 if pcf and tbase < 0:
-                    lit = pcf_blend(data, base, taps[_at(0, m)], taps[_at(1, m)], taps[_at(2, m)], taps[_at(3, m)],
-                                    q[_at(Q_W00, m)], q[_at(Q_W10, m)], q[_at(Q_W01, m)], q[_at(Q_W11, m)],
-                                    q[_at(Q_DREF, m)])
+                    lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
+                                    q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m],
+                                    q[Q_DREF + m])
                     fr, fg, fb = lit, lit, lit
                 else:
-                    fr, fg, fb = sample_map(data, tint, base, tbase, res, pcf, q[_at(Q_U, m)], q[_at(Q_V, m)],
-                                            q[_at(Q_DREF, m)])
+                    fr, fg, fb = sample_map(data, tint, base, tbase, res, pcf, q[Q_U + m], q[Q_V + m],
+                                            q[Q_DREF + m])
                 fr, fg, fb = apply_strength(strength, fr, fg, fb)
-                s[_at(R_VR, m)], s[_at(R_VG, m)], s[_at(R_VB, m)] = cast(one, fr), cast(one, fg), cast(one, fb)
+                s[R_VR + m], s[R_VG + m], s[R_VB + m] = cast(one, fr), cast(one, fg), cast(one, fb)
         return
     for m in range(n):
-        if s[_at(R_SS, m)] > zero and s[_at(R_ER, m)] + s[_at(R_EG, m)] + s[_at(R_EB, m)] > zero:
-            x, y, z = float(s[_at(R_X, m)]), float(s[_at(R_Y, m)]), float(s[_at(R_Z, m)])
+        if s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero:
+            x, y, z = float(s[R_X + m]), float(s[R_Y + m]), float(s[R_Z + m])
             if mode == SHADOW_EXACT:
                 fr, fg, fb = exact_visibility(geo, kind, lf, k, x, y, z)
             else:
                 fr, fg, fb = map_lit(shadows, kind, lf, k, x, y, z)
             fr, fg, fb = apply_strength(strength, fr, fg, fb)
-            s[_at(R_VR, m)], s[_at(R_VG, m)], s[_at(R_VB, m)] = cast(one, fr), cast(one, fg), cast(one, fb)
+            s[R_VR + m], s[R_VG + m], s[R_VB + m] = cast(one, fr), cast(one, fg), cast(one, fb)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _accumulate_stage(s, n, g):
     """``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then ``T *= e^{-σt Δ}`` (module docstring)."""
     zero, one = cast(g, 0.0), cast(g, 1.0)
     for m in range(n):
-        st, ss, em1, delta = s[_at(R_ST, m)], s[_at(R_SS, m)], s[_at(R_EM1, m)], s[_at(R_D, m)]
-        er, eg, eb = s[_at(R_ER, m)], s[_at(R_EG, m)], s[_at(R_EB, m)]
-        cos_t = s[_at(R_DX, m)] * s[_at(R_LX, m)] + s[_at(R_DY, m)] * s[_at(R_LY, m)] + s[_at(R_DZ, m)] * s[_at(R_LZ, m)]
+        st, ss, em1, delta = s[R_ST + m], s[R_SS + m], s[R_EM1 + m], s[R_D + m]
+        er, eg, eb = s[R_ER + m], s[R_EG + m], s[R_EB + m]
+        cos_t = s[R_DX + m] * s[R_LX + m] + s[R_DY + m] * s[R_LY + m] + s[R_DZ + m] * s[R_LZ + m]
         phase = cast(g, hg(cos_t, g))
         s_int = delta if st == zero else -em1 / st
-        f = s[_at(R_TRANS, m)] * ss * phase * s[_at(R_TL, m)] * s_int
+        f = s[R_TRANS + m] * ss * phase * s[R_TL + m] * s_int
         lit = ss > zero and er + eg + eb > zero
-        s[_at(R_AR, m)] += f * er * s[_at(R_VR, m)] if lit else zero
-        s[_at(R_AG, m)] += f * eg * s[_at(R_VG, m)] if lit else zero
-        s[_at(R_AB, m)] += f * eb * s[_at(R_VB, m)] if lit else zero
-        s[_at(R_TRANS, m)] *= one + em1
+        s[R_AR + m] += f * er * s[R_VR + m] if lit else zero
+        s[R_AG + m] += f * eg * s[R_VG + m] if lit else zero
+        s[R_AB + m] += f * eb * s[R_VB + m] if lit else zero
+        s[R_TRANS + m] *= one + em1
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -338,8 +335,8 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
         _accumulate_stage(s, n, g)
     for m in range(n):
         i, j = pix[m] // w, pix[m] % w
-        per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = (s[_at(R_AR, m)], s[_at(R_AG, m)],
-                                                                                 s[_at(R_AB, m)])
+        per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = (s[R_AR + m], s[R_AG + m],
+                                                                                 s[R_AB + m])
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
@@ -371,7 +368,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
             transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
                                                      dirs[i, j, 2], zero, te, steps))
         for k in range(n_lights):
-            n = 0
+            n = np.int64(0)  # not the literal 0: _march_packet would compile a second time for Literal[int](0)
             for p in range(task * TASK, p_end):
                 i, j = p // w, p % w
                 dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
@@ -387,7 +384,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
                 if n == LANES:
                     _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
                                   leg_steps, per_light)
-                    n = 0
+                    n = np.int64(0)
             if n > 0:
                 _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
                               leg_steps, per_light)
