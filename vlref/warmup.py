@@ -20,8 +20,10 @@ processes (:func:`march_ahead`): while the main process compiles the frame kerne
 cast, shading, shadow maps), a second process compiles the march for the scene's types on a 1×1
 frame that needs none of them (no objects, no shadow maps: the same array types, empty), and the
 main process picks it up from the cache when it reaches the march (the frame reports its shadow maps
-as built just before: ``Frame.tick``). The halves measure about 30 s each on an idle 2-core box
-(BENCHMARKS.md "Cold start").
+as built just before: ``Frame.tick``). A third process compiles the exact shadow ray the march calls
+(:func:`compile_shadow_rays`, the BVH traversal: about a third of the march's compile), which the march
+and the main process's shading then load from the cache. Cold, the default scene renders in 36–38 s
+on an idle 2-core box (BENCHMARKS.md "Cold start" and "Packets of rays").
 """
 
 from __future__ import annotations

@@ -72,7 +72,7 @@ def analytic_attenuation(law, d2, inv_range2):
     return inv
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False)
 def distance_attenuation(law, d2, inv_range2, lut):
     """Attenuation factor at squared distance ``d2`` (m²) for ``law`` (module docstring).
 

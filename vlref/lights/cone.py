@@ -41,7 +41,7 @@ def default_inner_angle(law: str, spot_angle: float) -> float:
     return max(0.0, spot_angle - 10.0)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False)
 def cone_falloff(law, cos_t, cos_outer, cos_inner, half_outer, half_inner, unity_a, unity_b):
     """Cone factor in [0, 1] for ``cos_t`` (module docstring); angles in radians."""
     if law != CONE_LINEAR:

@@ -317,12 +317,13 @@ def pcf_taps(u, v, res):
     """The 2x2 PCF taps around ``(u, v)`` on a ``res``² face: texel offsets ``row · res + col`` (clamped to the
     edge) ``(k00, k10, k01, k11)`` and bilinear weights ``(w00, w10, w01, w11)``. Scalars only: the march
     computes them in a vectorised lane loop. The column is clamped to [-1, res] in floating point before the
-    conversion to an integer (the same texels; no integer overflow far outside the map)."""
+    conversion to a 32-bit integer (the same texels; no overflow far outside the map)."""
     su, sv = u * res - 0.5, v * res - 0.5
     fu, fv = math.floor(su), math.floor(sv)
     wu, wv = su - fu, sv - fv
     edge = float(res)
-    c0, r0 = int(min(max(fu, -1.0), edge)), int(min(max(fv, -1.0), edge))
+    c0 = np.int32(min(max(fu, -1.0), edge)) + 0  # int32: a packed conversion on AVX2 (int64 has none)
+    r0 = np.int32(min(max(fv, -1.0), edge)) + 0
     c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
     r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
     top, bottom = r0c * res, r1c * res

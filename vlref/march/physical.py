@@ -84,8 +84,8 @@ from .segments import light_segment
 
 __all__ = ["march_physical", "LANES", "TASK"]
 
-LANES = 32  # (pixel, light) pairs per packet
-TASK = 4 * LANES  # pixels per prange iteration (its scratch is allocated once per thread)
+LANES = 64  # (pixel, light) pairs per packet
+TASK = 2 * LANES  # pixels per prange iteration (its scratch is allocated once per thread)
 
 # offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM
 # sees every row apart and vectorises without run-time alias checks)
