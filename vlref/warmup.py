@@ -20,10 +20,8 @@ processes (:func:`march_ahead`): while the main process compiles the frame kerne
 cast, shading, shadow maps), a second process compiles the march for the scene's types on a 1×1
 frame that needs none of them (no objects, no shadow maps: the same array types, empty), and the
 main process picks it up from the cache when it reaches the march (the frame reports its shadow maps
-as built just before: ``Frame.tick``). A third process compiles the exact shadow ray the march calls
-(:func:`compile_shadow_rays`, the BVH traversal: about a third of the march's compile), which the march
-and the main process's shading then load from the cache. Cold, the default scene renders in 36–38 s
-on an idle 2-core box (BENCHMARKS.md "Cold start" and "Packets of rays").
+as built just before: ``Frame.tick``). Cold, the default scene renders in about 45 s on an idle 2-core
+box, the march's compile being the longer half (BENCHMARKS.md "Cold start" and "Packets of rays").
 """
 
 from __future__ import annotations
@@ -38,7 +36,7 @@ from typing import Callable, Iterator
 
 import numpy as np
 
-__all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "compile_shadow_rays", "march_cached"]
+__all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "march_cached"]
 
 TINY = ["render.width=16", "render.height=9", "render.steps=2"]
 # name -> (what runs, bundled scene (None: the default), overrides at TINY size); see the module docstring
@@ -154,20 +152,6 @@ def compile_march(scene) -> None:
                   resolved(scene, "sampling"))
 
 
-def compile_shadow_rays(scene) -> None:
-    """Compile (or load) the exact shadow ray the march calls (:func:`vlref.lights.shadowmaps.exact_visibility`,
-    the BVH traversal, about a third of the march's compile) for ``scene``'s types, so that the march's own
-    compile finds it in the cache (:func:`march_ahead` runs this beside :func:`compile_march`)."""
-    from .lights.pack import KIND_POINT
-    from .lights.shadowmaps import exact_visibility
-
-    dtype = np.float32 if scene.render.precision == "float32" else np.float64
-    _, _, lights, _, geo = _kernel_frame(scene)
-    if lights.count == 0:
-        return
-    exact_visibility(geo, KIND_POINT, lights.astype(dtype).floats, 0, 0.0, 0.0, 0.0)
-
-
 def march_cached(scene) -> bool:
     """Whether Numba's cache holds the physical march for ``scene``'s precision (its index, read without
     compiling). False when the index cannot be read."""
@@ -198,13 +182,11 @@ def march_ahead(scene) -> Iterator[Callable[[], None]]:
         yield lambda: None
         return
     with _spawn_ignoring_sigint() as ctx:
-        procs = [ctx.Process(target=task, args=(scene,), daemon=True) for task in (compile_march, compile_shadow_rays)]
-        for proc in procs:
-            proc.start()
+        proc = ctx.Process(target=compile_march, args=(scene,), daemon=True)
+        proc.start()
     try:
-        yield procs[0].join
+        yield proc.join
     finally:
-        for proc in procs:
-            if proc.is_alive():
-                proc.terminate()
-            proc.join()
+        if proc.is_alive():
+            proc.terminate()
+        proc.join()

@@ -73,11 +73,10 @@ from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_D
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
 from ..lights.shading import cookie_rgb, light_vector
 from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, S_OFFSET, S_RES, S_STRENGTH,
-                                 apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, sample_map,
-                                 spot_map_coords)
+                                 apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
-                      fog_exponent, height_exponent, optical_depth, smooth_optical_depth)
+                      fog_exponent, height_exponent, optical_depth)
 from ..numeric import cast, exp, expm1
 from ..phase import hg
 from .segments import light_segment
@@ -93,10 +92,10 @@ ROWS = 34
 (R_A, R_D, R_B, R_DX, R_DY, R_DZ, R_TRANS, R_FOG, R_FOGQ, R_GEOM, R_X, R_Y, R_Z, R_EA, R_RHO, R_ST, R_SS, R_EM1,
  R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(0, ROWS * LANES,
                                                                                                         LANES)
-# float64 rows: a spot light's shadow-map coordinates and PCF weights, as map_lit computes them (and the
+# float64 rows: a spot light's shadow-map distance and PCF weights, as map_lit computes them (and the
 # int64 scratch ``taps`` holds the four texel offsets)
-QROWS = 8
-Q_U, Q_V, Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(0, QROWS * LANES, LANES)
+QROWS = 6
+Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(0, QROWS * LANES, LANES)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
@@ -216,8 +215,8 @@ def _light_stage(s, n, lights, k):
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
-    """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form, the analytic
-    :func:`~vlref.medium.smooth_optical_depth`, or the noise's sub-steps."""
+    """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form (vectorised), or
+    :func:`~vlref.medium.optical_depth` lane by lane."""
     mp, lattice = medium.params, medium.noise
     zero, one = cast(mp[0], 0.0), cast(mp[0], 1.0)
     st0 = mp[M_ST]
@@ -232,11 +231,6 @@ def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
             dist, ea, rho = s[R_DIST + m], s[R_EA + m], s[R_RHO + m]
             top = rho if ea >= el else fog_l
             s[R_TL + m] = exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
-    elif not noise:
-        for m in range(n):
-            s[R_TL + m] = exp(-smooth_optical_depth(mp, s[R_X + m], s[R_Y + m], s[R_Z + m],
-                                                        s[R_LX + m], s[R_LY + m], s[R_LZ + m], zero,
-                                                        s[R_DIST + m]))
     else:
         for m in range(n):
             s[R_TL + m] = exp(-optical_depth(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m],
@@ -247,7 +241,9 @@ def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
-    light's map coordinates are computed in a vectorised loop (float64 rows of ``q``), its taps lane by lane."""
+    light's PCF lookup without a transparent layer has its map coordinates, weights and texel offsets computed
+    in a vectorised loop (float64 rows of ``q``, ``taps``) and its four depth reads lane by lane; every other
+    lookup is :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
@@ -257,37 +253,29 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     if mode == SHADOW_NONE:
         return
     lf = lights.floats
-    if kind == KIND_SPOT and mode != SHADOW_EXACT:
+    sm_i, data = shadows.ints, shadows.data
+    if kind == KIND_SPOT and mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
         px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
         rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
         ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
         dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
         tan_half = float(lf[k, F_TAN_HALF])
-        sm_i, data, tint = shadows.ints, shadows.data, shadows.tint
         res, base = sm_i[k, S_RES], sm_i[k, S_OFFSET]
-        tbase = base if tint.shape[0] > 0 else -1
-        pcf = mode == SHADOW_PCF
         for m in range(n):
             u, v, d_ref, ahead = spot_map_coords(float(s[R_X + m]) - px, float(s[R_Y + m]) - py,
                                                  float(s[R_Z + m]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
                                                  tan_half)
             (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
-            q[Q_U + m], q[Q_V + m], q[Q_DREF + m] = u, v, d_ref
+            q[Q_DREF + m] = d_ref
             q[Q_AHEAD + m] = 1.0 if ahead else 0.0
             q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m] = w00, w10, w01, w11
             taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m] = k00, k10, k01, k11
         for m in range(n):
             if (q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero
                     and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero):
-                if pcf and tbase < 0:
-                    lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
-                                    q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m],
-                                    q[Q_DREF + m])
-                    fr, fg, fb = lit, lit, lit
-                else:
-                    fr, fg, fb = sample_map(data, tint, base, tbase, res, pcf, q[Q_U + m], q[Q_V + m],
-                                            q[Q_DREF + m])
-                fr, fg, fb = apply_strength(strength, fr, fg, fb)
+                lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
+                                q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m], q[Q_DREF + m])
+                fr, fg, fb = apply_strength(strength, lit, lit, lit)
                 s[R_VR + m], s[R_VG + m], s[R_VB + m] = cast(one, fr), cast(one, fg), cast(one, fb)
         return
     for m in range(n):
