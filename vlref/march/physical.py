@@ -121,8 +121,9 @@ def _setup(s, m, origin, dx, dy, dz, a, b, beta, steps, medium):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _medium_stage(s, n, i, origin, medium):
+def _medium_stage(s, n, i, origin, medium, geometric):
     """Sample positions ``x = o + t d``, ``t = a + (i + β) Δ``; density, ``σs``, ``σt``, ``expm1(-σt Δ)``.
+    ``geometric``: every lane takes the fog's running product.
     The vectorised loops read only scalars and ``s`` (an array read inside a lane loop costs reference
     counting calls, which keep the loop scalar)."""
     mp, lattice = medium.params, medium.noise
@@ -142,9 +143,6 @@ def _medium_stage(s, n, i, origin, medium):
         for m in range(n):
             s[R_RHO + m] = density(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m])
     else:  # smooth_density, with the fog's running product where it holds (on every lane: no exp at all)
-        geometric = True
-        for m in range(n):
-            geometric = geometric and s[R_GEOM + m] != zero
         for m in range(n):
             inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, s[R_X + m], s[R_Y + m],
                                                  s[R_Z + m])
@@ -315,8 +313,11 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
+    geometric = True
+    for m in range(n):
+        geometric = geometric and s[R_GEOM + m] != 0.0
     for i in range(steps):
-        _medium_stage(s, n, i, origin, medium)
+        _medium_stage(s, n, i, origin, medium, geometric)
         _light_stage(s, n, lights, k)
         _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps)
         _shadow_stage(s, q, taps, n, shadows, geo, lights, k)
