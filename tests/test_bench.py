@@ -43,9 +43,28 @@ def test_every_section_with_finite_positive_figures(report):
     assert {"one_spot", "four_lights"} <= set(report["march"])
     assert report["march"]["four_lights"]["samples"] > report["march"]["one_spot"]["samples"] > 0
     assert "1" in report["scaling"]["threads"]
+    ceiling = report["scaling"]["machine_ceiling"]
+    assert set(ceiling) == {"scalar_exp", "vector_exp"}
+    assert all(runs["1"]["efficiency"] == 1.0 and runs["1"]["exp_per_s"] > 0 for runs in ceiling.values())
     assert report["first_render"]["warm"]["render_s"] > 0
     assert report["memory"]["subprocess_maxrss_bytes"] > report["memory"]["tracemalloc_peak_bytes"] > 0
     assert len(report["targets"]) == 7 and all(isinstance(t["met"], bool) for t in report["targets"])
+
+
+def test_the_machine_ceiling_kernels_compute_their_chains():
+    from vlref.bench.ceiling import ITEMS, LANES, scalar_exp, vector_exp
+
+    out = np.empty(ITEMS)
+    scalar_exp(out, 7)
+    x = 1.0 + np.arange(ITEMS) * 1e-6
+    for _ in range(7):
+        x = np.exp(-x) + 0.5
+    np.testing.assert_allclose(out, x, rtol=1e-14)
+    vector_exp(out, 7)
+    x = 1.0 + np.arange(ITEMS * LANES).reshape(ITEMS, LANES) * 1e-6
+    for _ in range(7):
+        x = np.exp(-x) + 0.5
+    np.testing.assert_allclose(out, x.sum(axis=1), rtol=1e-14)
 
 
 def test_numpy_baseline_is_the_same_computation(report):

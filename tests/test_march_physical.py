@@ -11,7 +11,7 @@ from hypothesis import given, settings, strategies as st
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
-from vlref.lights.shadowmaps import NSF, NSI, ShadowMaps
+from vlref.lights.shadowmaps import NSF, NSI, S_MODE, SHADOW_EXACT, ShadowMaps
 from vlref.march.physical import march_physical
 from vlref.medium import M_ST, pack_medium
 from vlref.phase import hg
@@ -302,6 +302,17 @@ def test_steps_are_placed_inside_the_medium_box():
     np.testing.assert_allclose(trans, ref.transmittance, rtol=1e-12)
 
 
+def test_exact_shadows_need_the_geometry():
+    scene = _scene([Light(type="point", position=(0.0, 0.0, 3.0))], w=4, h=3)
+    table = _no_shadows(1)
+    table.ints[0, S_MODE] = SHADOW_EXACT
+    per, trans = np.zeros((1, 3, 4, 3)), np.empty((3, 4))
+    cam = camera_from_settings(scene.camera, 4, 3)
+    with pytest.raises(ValueError, match="exact shadows, and geo is None"):
+        march_physical(cam.position, cam.ray_directions(), np.full((3, 4), 50.0), np.full((3, 4), 0.5), 4,
+                       pack_medium(scene), pack_lights(scene), table.table, None, True, 2, per, trans)
+
+
 @pytest.mark.parametrize("precision", ["float64", "float32"])
 def test_a_pixel_does_not_depend_on_its_packet(precision):
     """The march runs packets of rays through vectorised lane loops (and a scalar remainder loop): a pixel
@@ -326,6 +337,10 @@ def test_a_pixel_does_not_depend_on_its_packet(precision):
     trans = np.empty((16, 24), dtype=dtype)
     march_physical(origin, dirs, t_end, beta, 8, *args, per, trans)
     assert per.max() > 0 and np.count_nonzero(per.sum(axis=-1), axis=(1, 2)).min() > 20
+    # no light traces shadow rays: the kernel compiled without the ray tracer (geo None) gives the same bits
+    lean, lean_t = np.zeros_like(per), np.empty_like(trans)
+    march_physical(origin, dirs, t_end, beta, 8, *args[:3], None, *args[4:], lean, lean_t)
+    assert np.array_equal(lean, per) and np.array_equal(lean_t, trans)
     for i in range(16):
         for j in range(24):
             one = np.zeros((4, 1, 1, 3), dtype=dtype)

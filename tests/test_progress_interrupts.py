@@ -14,6 +14,7 @@ import threading
 import time
 from pathlib import Path
 
+import numba
 import numpy as np
 import pytest
 
@@ -42,15 +43,21 @@ def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
 
 
 def test_the_march_reports_progress_band_by_band():
-    """A march long enough to show a bar (11.5 M samples: about a second on 2 cores) moves it at least 10
-    times, rows increasing; bands follow the work (``SAMPLES_PER_BAND``), not the clock."""
+    """A march long enough to show a bar (11.5 M samples: about half a second on 2 threads) moves it at
+    least 10 times, rows increasing; bands follow the work (``SAMPLES_PER_BAND`` per thread), not the clock."""
     from vlref.techniques.physical import SAMPLES_PER_BAND
 
     scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=200"])
     calls = []
-    with reporting(lambda done, total: calls.append((done, total))):
-        render(scene)
-    assert len(calls) == progress.bands_for(320 * 180 * 200, SAMPLES_PER_BAND) >= 10
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
+    try:
+        with reporting(lambda done, total: calls.append((done, total))):
+            render(scene)
+        per_band = SAMPLES_PER_BAND * numba.get_num_threads()
+    finally:
+        numba.set_num_threads(before)
+    assert len(calls) == progress.bands_for(320 * 180 * 200, per_band) >= 10
     assert all(total == 180 for _, total in calls) and calls[-1] == (180, 180)
     assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
 
@@ -157,6 +164,7 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     ("stained_glass", []),  # transparent tinted occluders: shadow-map tints
     ("slightlymad_spot", ['render.technique="physical"']),  # density noise
     ("pillars", ['render.precision="float32"']),
+    ("pillars", ['lights.0.shadows.filter="exact"']),  # the march variant with the shadow-ray tracer
 ])
 def test_the_kernel_frame_compiles_the_march_the_real_frame_calls(scene_name, extra):
     """``vlref render`` compiles the march ahead on a 1×1 frame with no objects and no shadow maps: it

@@ -44,6 +44,10 @@ TASKS: dict[str, tuple[str, str | None, list[str]]] = {
     "frame": ("frame", None, []),
     "physical float64": ("render", None, ['render.technique="physical"']),
     "physical float32": ("render", None, ['render.technique="physical"', 'render.precision="float32"']),
+    # the march with the shadow-ray tracer is a kernel of its own (vlref.march.physical.march_physical)
+    "physical exact float64": ("render", None, ['render.technique="physical"', 'lights.0.shadows.filter="exact"']),
+    "physical exact float32": ("render", None, ['render.technique="physical"', 'render.precision="float32"',
+                                                'lights.0.shadows.filter="exact"']),
     "killzone": ("render", None, ['render.technique="killzone"']),
     "slightlymad": ("render", None, ['render.technique="slightlymad"']),
     "urp": ("render", "urp_sun", ['render.technique="urp"']),  # URP needs a directional main light
@@ -125,17 +129,26 @@ def cache_location() -> str:
     return numba.config.CACHE_DIR or f"__pycache__ folders under {os.path.dirname(os.path.abspath(__file__))}"
 
 
+def _exact(light) -> bool:
+    """Whether ``light`` has ``exact`` shadows (the march variant with the ray tracer)."""
+    return light.shadows is not None and light.shadows.enabled and light.shadows.filter == "exact"
+
+
 def _kernel_frame(scene):
     """The physical march's inputs for a 1×1 frame of ``scene`` built without any njit call: no objects
-    (empty geometry arrays), no shadow maps (empty tables), the sky at every pixel. Every array has the
-    dtype, rank and layout of the full frame's, so the march compiled for it serves the real frame."""
+    (empty geometry arrays), no shadow maps (empty tables; ``exact`` shadows are kept, they need no map),
+    the sky at every pixel. Every array has the dtype, rank and layout of the full frame's, so the march
+    compiled for it serves the real frame."""
     from .camera import camera_from_settings
     from .geometry import build_geometry
     from .lights import pack_lights
     from .lights.shadowmaps import build_shadow_maps
 
+    def bare_light(light):  # exact shadows are kept: they need no map, and choose the kernel's variant
+        return light if _exact(light) else dataclasses.replace(light, shadows=None)
+
     bare = scene.replace(render=dataclasses.replace(scene.render, width=1, height=1), objects=(),
-                         lights=tuple(dataclasses.replace(light, shadows=None) for light in scene.lights))
+                         lights=tuple(bare_light(light) for light in scene.lights))
     camera = camera_from_settings(bare.camera, 1, 1)
     geometry = build_geometry(bare)
     lights = pack_lights(bare)
@@ -153,20 +166,21 @@ def compile_march(scene) -> None:
 
 
 def march_cached(scene) -> bool:
-    """Whether Numba's cache holds the physical march for ``scene``'s precision (its index, read without
-    compiling). False when the index cannot be read."""
+    """Whether Numba's cache holds the physical march for ``scene``'s precision and shadow-ray variant (its
+    index, read without compiling). False when the index cannot be read."""
     import numba
 
     from .march.physical import march_physical
 
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
+    rays = any(_exact(light) for light in scene.lights)
     try:
         cache = march_physical._cache
         codegen = march_physical.targetctx.codegen()
         _, magic, code = cache._index_key((), codegen)
         want = numba.typeof(np.zeros(3, dtype=dtype))
-        return any(key[1] == magic and key[2] == code and key[0] and key[0][0] == want
-                   for key in cache._cache_file._load_index())
+        return any(key[1] == magic and key[2] == code and len(key[0]) > 8 and key[0][0] == want
+                   and (key[0][8] != numba.types.none) == rays for key in cache._cache_file._load_index())
     except Exception:  # a Numba without these internals: assume cold
         return False
 

@@ -15,7 +15,9 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
                   (a)'s rays) at the full size on all threads and at the scaling size on one thread, with
                   the kernel/plain ratios.
 ``scaling``       (a) at 1, 2, 4, 8 and 16 Numba threads (counts above ``NUMBA_NUM_THREADS`` are skipped
-                  and listed); speedup and parallel efficiency relative to one thread.
+                  and listed); speedup and parallel efficiency relative to one thread; and
+                  ``machine_ceiling``: the efficiency at the same counts of two kernels that share no
+                  memory, a scalar ``exp`` chain and a vectorised lane loop (:mod:`vlref.bench.ceiling`).
 ``raycast``       the G-buffer (primary rays/s); ``shadow_maps``: the four lights' maps (texels/s), and,
                   without ``--quick``, raycast and shadow maps of the bundled ``forest``, ``cage``, ``window``.
 ``post``          each post pass on a full-resolution frame (min-downsample, the three depth-aware
@@ -36,7 +38,7 @@ Timings are medians of ``repeats`` runs after one warm-up run (JIT compile exclu
 SciPy) is all this module needs.
 
 Modules, one per group of sections: :mod:`.config` (sizes, scene, timer), :mod:`.march` (``march``,
-``scaling``, ``baseline``), :mod:`.baseline` (the NumPy baseline), :mod:`.stages` (``raycast``,
+``scaling``, ``baseline``), :mod:`.ceiling` (the machine's own scaling), :mod:`.baseline` (the NumPy baseline), :mod:`.stages` (``raycast``,
 ``shadow_maps``, ``post``), :mod:`.renders` (``reference``, ``first_render``, ``memory``), :mod:`.report`
 (``machine``, ``targets``, the text report). The command line is :mod:`vlref.cli.bench`.
 """

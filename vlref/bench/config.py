@@ -37,12 +37,14 @@ class BenchConfig:
     bundled: tuple[str, ...] = ("forest", "cage", "window")
     shadow_resolution: int = 1024
     cold_cache: bool = True  # a cold first render compiles every kernel: ~90 s on 2 busy cores
+    ceiling_steps: int = 2000  # steps per lane of the machine's scaling kernels (vlref.bench.ceiling)
 
 
 FULL = BenchConfig()
 QUICK = BenchConfig(width=48, height=27, steps=8, repeats=1, small=(32, 18), baseline=(16, 9), preview=(32, 18, 4),
                     reference=(4, 3),
-                    first_render=(16, 9), memory_steps=2, bundled=(), shadow_resolution=64, cold_cache=False)
+                    first_render=(16, 9), memory_steps=2, bundled=(), shadow_resolution=64, cold_cache=False,
+                    ceiling_steps=4)
 
 
 def bench_scene(width: int, height: int, steps: int, lights: str = "one", shadow_resolution: int = 1024,

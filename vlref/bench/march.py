@@ -14,6 +14,7 @@ from ..lights.pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ,
                            F_UZ)
 from ..march.segments import light_segment
 from ..scene.model import Scene
+from .ceiling import bench_ceiling
 from .config import THREADS, BenchConfig, bench_scene, median_time
 
 __all__ = ["march_samples", "bench_march", "plain_march", "bench_baseline", "bench_scaling"]
@@ -170,7 +171,8 @@ def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
 
 
 def bench_scaling(cfg: BenchConfig) -> dict:
-    """(a) at ``cfg.small`` for each thread count of ``THREADS`` that Numba allows."""
+    """(a) at ``cfg.small`` for each thread count of ``THREADS`` that Numba allows, and the machine's own
+    scaling at the same counts (``machine_ceiling``: :func:`vlref.bench.ceiling.bench_ceiling`)."""
     limit = numba.config.NUMBA_NUM_THREADS
     before = numba.get_num_threads()
     w, h = cfg.small
@@ -186,5 +188,5 @@ def bench_scaling(cfg: BenchConfig) -> dict:
     for n, r in runs.items():
         r["speedup"] = r["samples_per_s"] / base
         r["efficiency"] = r["speedup"] / int(n)
-    return {"numba_num_threads": limit, "threads": runs, "skipped": skipped,
+    return {"numba_num_threads": limit, "threads": runs, "skipped": skipped, "machine_ceiling": bench_ceiling(cfg),
             "note": (f"thread counts {skipped} skipped: above NUMBA_NUM_THREADS = {limit}" if skipped else "")}

@@ -37,7 +37,7 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
     return [
         _target("march samples/s per core (one spot, float64, 1 thread)", per_core, 100e6, "samples/s", "higher"),
         _target(f"parallel efficiency at {top} threads", scaling[top]["efficiency"], 0.85, "", "higher",
-                "target is at 16 threads on 16 cores" if top != "16" else ""),
+                ("target is at 16 threads on 16 cores; " if top != "16" else "") + _ceiling_note(r, top)),
         _target(f"{one['width']}x{one['height']} x {one['steps']} steps x 1 shadowed spot ({cores} threads)",
                 one["seconds"], 0.25, "s", note="target is on 16 cores"),
         _target("preview re-render {}x{}, {} steps, half res, incl. post passes".format(*cfg.preview),
@@ -48,6 +48,13 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
         _target(f"peak memory, {cfg.width}x{cfg.height}, four shadowed lights (subprocess maxrss)",
                 r["memory"]["subprocess_maxrss_bytes"] / 2**30, 1.0, "GiB"),
     ]
+
+
+def _ceiling_note(r: dict, top: str) -> str:
+    ceiling = r["scaling"].get("machine_ceiling", {})
+    found = {name: runs[top]["efficiency"] for name, runs in ceiling.items() if top in runs}
+    return ("this machine's own efficiency at these threads: "
+            + ", ".join(f"{name} {eff:.2f}" for name, eff in found.items())) if found else ""
 
 
 def machine_info(argv: list[str]) -> dict:
@@ -112,6 +119,9 @@ def format_report(r: dict) -> str:
     for n, s in r["scaling"]["threads"].items():
         lines.append(f"threads {n:>2s}: {s['samples_per_s'] / 1e6:.2f} M samples/s, speedup {s['speedup']:.2f}, "
                      f"efficiency {s['efficiency']:.2f}")
+    for name, runs in r["scaling"].get("machine_ceiling", {}).items():
+        lines.append(f"machine ceiling {name}: efficiency " + ", ".join(f"{n} thr {s['efficiency']:.2f}"
+                                                                     for n, s in runs.items()))
     if r["scaling"]["note"]:
         lines.append(r["scaling"]["note"])
     for name, s in r["raycast"].items():

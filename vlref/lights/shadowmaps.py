@@ -116,6 +116,11 @@ class ShadowMaps:
         ints[shadowed, S_MODE] = mode
         return ShadowMaps(ints, self.floats, self.data, self.tint, self.names)
 
+    @property
+    def traces_rays(self) -> bool:
+        """Whether a light's shadows are ``exact`` (shadow rays through the geometry) rather than map lookups."""
+        return bool(np.any(self.ints[:, S_MODE] == SHADOW_EXACT))
+
     def mode(self, light: int) -> int:
         """The lookup mode of ``light`` (``SHADOW_NONE``, ``SHADOW_HARD``, ``SHADOW_PCF``, ``SHADOW_EXACT``)."""
         return int(self.ints[light, S_MODE])

@@ -78,6 +78,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, optical_depth)
 from ..numeric import cast, exp, expm1
+from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
 
@@ -268,18 +269,20 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             q[Q_AHEAD + m] = 1.0 if ahead else 0.0
             q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m] = w00, w10, w01, w11
             taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m] = k00, k10, k01, k11
+        # every lane reads its taps (always inside the map: pcf_taps clamps them), so the loop has no branch
+        # and the four reads vectorise as gathers; lanes that scatter nothing keep V = 1
         for m in range(n):
-            if (q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero
-                    and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero):
-                lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
-                                q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m], q[Q_DREF + m])
-                fr, fg, fb = apply_strength(strength, lit, lit, lit)
-                s[R_VR + m], s[R_VG + m], s[R_VB + m] = cast(one, fr), cast(one, fg), cast(one, fb)
+            lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
+                            q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m], q[Q_DREF + m])
+            fr, _, _ = apply_strength(strength, lit, lit, lit)
+            used = q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero
+            v = cast(one, fr) if used else one
+            s[R_VR + m], s[R_VG + m], s[R_VB + m] = v, v, v
         return
     for m in range(n):
         if s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero:
             x, y, z = float(s[R_X + m]), float(s[R_Y + m]), float(s[R_Z + m])
-            if mode == SHADOW_EXACT:
+            if geo is not None and mode == SHADOW_EXACT:  # geo None: Numba prunes the branch (no ray tracer)
                 fr, fg, fb = exact_visibility(geo, kind, lf, k, x, y, z)
             else:
                 fr, fg, fb = map_lit(shadows, kind, lf, k, x, y, z)
@@ -313,9 +316,10 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
-    geometric = True
+    n_geometric = 0
     for m in range(n):
-        geometric = geometric and s[R_GEOM + m] != 0.0
+        n_geometric += s[R_GEOM + m] != 0.0
+    geometric = n_geometric == n  # a bool, never Literal[bool](True): _medium_stage would compile twice
     for i in range(steps):
         _medium_stage(s, n, i, origin, medium, geometric)
         _light_stage(s, n, lights, k)
@@ -328,37 +332,32 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
                                                                                  s[R_AB + m])
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
-def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                   per_light, transmittance):
-    """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
-
-    origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
-    type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
-    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
-    ``geo`` the geometry tuple (exact shadows). Work is split in tasks of ``TASK`` pixels, each marched in
-    packets of up to ``LANES`` (pixel, light) pairs with a non-empty segment.
-    """
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows, geo,
+                 per_light, transmittance):
+    """Take tasks of ``TASK`` pixels (:func:`vlref.parallel.take` on ``taken``) until none is left; per task,
+    its pixels' transmittance, then per light its pairs with a non-empty segment in packets of up to ``LANES``
+    (module docstring)."""
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     h, w = t_end.shape
-    n_lights = lights.ints.shape[0]
-    n_tasks = (h * w + TASK - 1) // TASK
     zero = cast(ox, 0.0)
-    for task in prange(n_tasks):
-        s = np.empty(ROWS * LANES, dtype=t_end.dtype)
-        q = np.empty(QROWS * LANES, dtype=np.float64)
-        taps = np.empty(4 * LANES, dtype=np.int64)
-        pix = np.empty(LANES, dtype=np.int64)
-        p_end = min(h * w, (task + 1) * TASK)
-        for p in range(task * TASK, p_end):
+    s = np.empty(ROWS * LANES, dtype=t_end.dtype)
+    q = np.empty(QROWS * LANES, dtype=np.float64)
+    taps = np.empty(4 * LANES, dtype=np.int64)
+    pix = np.empty(LANES, dtype=np.int64)
+    while True:
+        task = take(taken)
+        p_start, p_end = task * TASK, min(h * w, (task + 1) * TASK)
+        if p_start >= p_end:
+            return
+        for p in range(p_start, p_end):
             i, j = p // w, p % w
-            te = t_end[i, j]
             transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
-                                                     dirs[i, j, 2], zero, te, steps))
-        for k in range(n_lights):
+                                                     dirs[i, j, 2], zero, t_end[i, j], steps))
+        for k in range(lights.ints.shape[0]):
             n = np.int64(0)  # not the literal 0: _march_packet would compile a second time for Literal[int](0)
-            for p in range(task * TASK, p_end):
+            for p in range(p_start, p_end):
                 i, j = p // w, p % w
                 dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
                 a, b = light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end[i, j])
@@ -371,9 +370,37 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
                 pix[n] = p
                 n += 1
                 if n == LANES:
-                    _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
-                                  leg_steps, per_light)
+                    _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo,
+                                  light_extinction, leg_steps, per_light)
                     n = np.int64(0)
             if n > 0:
                 _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
                               leg_steps, per_light)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
+def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
+                   per_light, transmittance):
+    """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
+
+    origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
+    type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
+    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
+    ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
+    compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Cold start").
+
+    The pixels are split in tasks of ``TASK`` consecutive pixels. The threads of a ``prange`` over
+    :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a pixel's cost varies from nothing to hundreds
+    of samples, and ``prange``'s own split is static), each marched in packets of up to ``LANES``
+    (pixel, light) pairs. The workers get the arrays without reference counts (:func:`vlref.parallel.borrowed`:
+    the stages take the records on every step).
+    """
+    if geo is None:
+        for k in range(shadows.ints.shape[0]):
+            if shadows.ints[k, S_MODE] == SHADOW_EXACT:
+                raise ValueError("march_physical: a light has exact shadows, and geo is None")
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        o, d, te, off, med, lts, shd, gg, out, tr = borrowed((origin, dirs, t_end, offsets, medium, lights, shadows,
+                                                              geo, per_light, transmittance))
+        _march_tasks(taken, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)

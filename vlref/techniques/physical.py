@@ -24,11 +24,11 @@ from ..medium import pack_medium
 from ..progress import bands_for, row_bands
 from . import resolved
 
-__all__ = ["render", "march_buffers", "MARCH_CHUNK", "SAMPLES_PER_BAND"]
+__all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
 
-MARCH_CHUNK = 64  # pixels per dynamically scheduled chunk of the march's prange
-# pixel × step × light samples per band of rows (vlref.progress): ~0.1 s on 2 cores, ~0.02 s on 16
-SAMPLES_PER_BAND = 1_000_000
+# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.03-0.05 s
+# and gives each thread tens of the march's tasks to take (vlref.parallel), so few wait at its end
+SAMPLES_PER_BAND = 500_000
 
 
 def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, steps: int, sampling: str):
@@ -46,19 +46,19 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     packed = lights.astype(dtype)
     per_light = np.zeros((packed.count, h, w, 3), dtype=dtype)
     trans = np.empty((h, w), dtype=dtype)
-    # Dynamic scheduling in chunks of MARCH_CHUNK pixels: a pixel's cost varies ~10x (outside the cone,
-    # shadowed, lit), so equal contiguous blocks per thread leave threads idle. The frame is marched in
-    # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); each band's lights go to a
-    # contiguous buffer (the kernel's one array layout) copied into place. Pixels are independent, so
-    # neither the chunking nor the bands change a bit of the result.
+    # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); each band's
+    # lights go to a contiguous buffer (the kernel's one array layout) copied into place. Pixels are
+    # independent, so the bands change no bit of the result.
+    # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
+    # (a second, smaller kernel; vlref.march.physical.march_physical)
     position = np.asarray(camera.position, dtype=dtype)
-    with numba.parallel_chunksize(MARCH_CHUNK):
-        for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, SAMPLES_PER_BAND)):
-            band = np.zeros((packed.count, y1 - y0, w, 3), dtype=dtype)
-            march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
-                           shadow_maps.table, geo, bool(scene.techniques.physical.light_extinction),
-                           int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
-            per_light[:, y0:y1] = band
+    per_band = SAMPLES_PER_BAND * numba.get_num_threads()
+    for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band)):
+        band = np.zeros((packed.count, y1 - y0, w, 3), dtype=dtype)
+        march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
+                       shadow_maps.table, geo if shadow_maps.traces_rays else None, bool(scene.techniques.physical.light_extinction),
+                       int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
+        per_light[:, y0:y1] = band
     return per_light, trans
 
 

@@ -1,0 +1,83 @@
+"""What the parallel kernels need beyond ``prange``: tasks handed out on demand, and arrays without reference counts.
+
+**Tasks on demand** (:func:`take`). ``prange`` splits its iterations into one contiguous block per thread
+when the loop starts (Numba's ``parallel_chunksize`` has no effect under the OpenMP threading layer, the
+one installed here, as Numba's tracker says at github.com/numba/numba/issues/8284; measured too: the same
+blocks for every chunk size). A march's
+pixels cost between nothing (outside every light) and hundreds of samples, so equal blocks leave most
+threads idle while one finishes the bright part of the frame. A kernel that loops ``prange`` over its
+threads, each taking the next task from a shared counter with :func:`take` until none is left, keeps
+every thread busy to the last task. The loop runs over :data:`WORKERS` iterations, more than any
+machine's threads (a kernel that asks Numba for its thread count cannot be cached): each thread's first
+iteration takes tasks until none is left, and its other iterations find none. Which thread marches which
+task changes no result: tasks are independent and each writes only its own pixels.
+
+**Arrays without reference counts** (:func:`borrowed`). Numba counts references to every array passed to
+a compiled function, with an atomic add on a counter stored beside the array's data. When 16 threads
+pass the same input arrays (the light, shadow and medium records) to small functions on every step,
+they contend for those counters' cache lines. A borrowed view has no counter, so counting its references
+does nothing. It does not keep its memory alive either: borrow only inside the kernel that received the
+array as an argument (its owner outlives the call).
+"""
+
+from __future__ import annotations
+
+from numba.core import cgutils, types
+from numba.core.errors import TypingError
+from numba.extending import intrinsic
+
+__all__ = ["WORKERS", "take", "borrowed"]
+
+WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
+
+
+@intrinsic
+def take(typingctx, counter):
+    """``counter[0]`` before adding 1 to it, atomically: every call gets a different number, 0, 1, 2, …
+    across all threads. ``counter`` a 1-element int64 array (C order). njit only."""
+    if not (isinstance(counter, types.Array) and counter.dtype == types.int64 and counter.ndim == 1):
+        raise TypingError(f"take: the counter must be a 1-d int64 array, not {counter}")
+
+    def codegen(context, builder, signature, args):
+        array = context.make_array(signature.args[0])(context, builder, value=args[0])
+        one = context.get_constant(types.int64, 1)
+        return builder.atomic_rmw("add", array.data, one, "monotonic")
+
+    return types.int64(counter), codegen
+
+
+def _check_borrowable(ty):
+    if isinstance(ty, types.Array):
+        return
+    if isinstance(ty, types.BaseTuple):
+        for t in ty.types:
+            _check_borrowable(t)
+        return
+    if not isinstance(ty, (types.Number, types.Boolean, types.NoneType)):
+        raise TypingError(f"borrowed: cannot borrow a {ty}")
+
+
+def _borrow(context, builder, ty, value):
+    if isinstance(ty, types.Array):
+        view = context.make_array(ty)(context, builder, value=value)
+        view.meminfo = cgutils.get_null_value(view.meminfo.type)
+        view.parent = cgutils.get_null_value(view.parent.type)
+        return view._getvalue()
+    if isinstance(ty, types.BaseTuple):
+        out = value
+        for index, t in enumerate(ty.types):
+            out = builder.insert_value(out, _borrow(context, builder, t, builder.extract_value(value, index)), index)
+        return out
+    return value
+
+
+@intrinsic
+def borrowed(typingctx, value):
+    """``value`` (an array, or a tuple or NamedTuple of arrays, numbers and None) with every array's reference
+    counter removed: the same type, data, shape and strides. njit only."""
+    _check_borrowable(value)
+
+    def codegen(context, builder, signature, args):
+        return _borrow(context, builder, signature.args[0], args[0])
+
+    return value(value), codegen
