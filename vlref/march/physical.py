@@ -241,8 +241,9 @@ def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
     light's PCF lookup without a transparent layer has its map coordinates, weights and texel offsets computed
-    in a vectorised loop (float64 rows of ``q``, ``taps``) and its four depth reads lane by lane; every other
-    lookup is :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
+    in one vectorised loop (float64 rows of ``q``, ``taps``) and its four depth reads in a second loop without
+    branches (gathers where the CPU has them: AVX-512; one loop for both was slower on an AVX2 machine). Every
+    other lookup is :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
