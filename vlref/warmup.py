@@ -20,8 +20,11 @@ processes (:func:`march_ahead`): while the main process compiles the frame kerne
 cast, shading, shadow maps), a second process compiles the march for the scene's types on a 1×1
 frame that needs none of them (no objects, no shadow maps: the same array types, empty), and the
 main process picks it up from the cache when it reaches the march (the frame reports its shadow maps
-as built just before: ``Frame.tick``). Cold, the default scene renders in about 45 s on an idle 2-core
-box, the march's compile being the longer half (BENCHMARKS.md "Cold start" and "Packets of rays").
+as built just before: ``Frame.tick``). The 1×1 frame keeps the lights' ``exact`` shadows, which choose
+the march's variant with the shadow-ray tracer (:func:`vlref.march.physical.march_physical`). Cold, the
+default scene renders in about 40 s on an idle 2-core box; the frame's kernels (about 38 s of compile)
+are now the longer half, the march without the ray tracer about 27 s (BENCHMARKS.md "Cold start" and
+"Scheduling, borrowed records, a leaner compile").
 """
 
 from __future__ import annotations
