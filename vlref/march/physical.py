@@ -57,8 +57,9 @@ reused for the larger end. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``
 needs. These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against
 the per-step ``exp`` form).
 
-Determinism: ``prange`` over tasks of pixels only, no cross-pixel reduction; a lane's arithmetic does
-not depend on the other lanes of its packet: the same bits for any thread count.
+Determinism: threads take tasks of pixels (:mod:`vlref.parallel`), each task writes only its own pixels,
+no cross-pixel reduction; a lane's arithmetic does not depend on the other lanes of its packet: the same
+bits for any thread count and any order in which the tasks are taken.
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ from .segments import light_segment
 __all__ = ["march_physical", "LANES", "TASK"]
 
 LANES = 64  # (pixel, light) pairs per packet
-TASK = 2 * LANES  # pixels per prange iteration (its scratch is allocated once per thread)
+TASK = 2 * LANES  # pixels per task (the threads take tasks on demand: vlref.parallel.take)
 
 # offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM
 # sees every row apart and vectorises without run-time alias checks)
@@ -388,13 +389,14 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
     (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
-    compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Cold start").
+    compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
+    borrowed records, a leaner compile").
 
     The pixels are split in tasks of ``TASK`` consecutive pixels. The threads of a ``prange`` over
-    :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a pixel's cost varies from nothing to hundreds
-    of samples, and ``prange``'s own split is static), each marched in packets of up to ``LANES``
-    (pixel, light) pairs. The workers get the arrays without reference counts (:func:`vlref.parallel.borrowed`:
-    the stages take the records on every step).
+    :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
+    pixel's cost varies from nothing to hundreds of samples, and ``prange``'s own split is static), each
+    marched in packets of up to ``LANES`` (pixel, light) pairs. The workers get the arrays without reference
+    counts (:func:`vlref.parallel.borrowed`: the stages take the records on every step).
     """
     if geo is None:
         for k in range(shadows.ints.shape[0]):
