@@ -182,8 +182,9 @@ def march_cached(scene) -> bool:
         codegen = march_physical.targetctx.codegen()
         _, magic, code = cache._index_key((), codegen)
         want = numba.typeof(np.zeros(3, dtype=dtype))
-        return any(key[1] == magic and key[2] == code and len(key[0]) > 8 and key[0][0] == want
-                   and (key[0][8] != numba.types.none) == rays for key in cache._cache_file._load_index())
+        geo = 8  # march_physical's argument ``geo``: None for the variant without the ray tracer
+        return any(key[1] == magic and key[2] == code and len(key[0]) > geo and key[0][0] == want
+                   and (key[0][geo] != numba.types.none) == rays for key in cache._cache_file._load_index())
     except Exception:  # a Numba without these internals: assume cold
         return False
 

@@ -249,10 +249,6 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
     zero, one = cast(lights.floats[0, 0], 0.0), cast(lights.floats[0, 0], 1.0)
-    for m in range(n):
-        s[R_VR + m] = s[R_VG + m] = s[R_VB + m] = one
-    if mode == SHADOW_NONE:
-        return
     lf = lights.floats
     sm_i, data = shadows.ints, shadows.data
     if kind == KIND_SPOT and mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
@@ -280,6 +276,10 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             used = q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero
             v = cast(one, fr) if used else one
             s[R_VR + m], s[R_VG + m], s[R_VB + m] = v, v, v
+        return
+    for m in range(n):  # the PCF loop above writes every lane; here V = 1 unless a lookup says otherwise
+        s[R_VR + m] = s[R_VG + m] = s[R_VB + m] = one
+    if mode == SHADOW_NONE:
         return
     for m in range(n):
         if s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero:
