@@ -12,7 +12,7 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
 from vlref.lights.shadowmaps import NSF, NSI, S_MODE, SHADOW_EXACT, ShadowMaps
-from vlref.march.physical import march_physical
+from vlref.march.physical import TILE_H, TILE_W, march_physical
 from vlref.medium import M_ST, pack_medium
 from vlref.phase import hg
 from vlref.scene.model import (Bounds, CameraSettings, HeightFog, Light, Medium, Noise,
@@ -315,34 +315,36 @@ def test_exact_shadows_need_the_geometry():
 
 @pytest.mark.parametrize("precision", ["float64", "float32"])
 def test_a_pixel_does_not_depend_on_its_packet(precision):
-    """The march runs packets of rays through vectorised lane loops (and a scalar remainder loop): a pixel
-    marched alone (lane 0 of a one-lane packet) gets the same bits as inside a full frame."""
+    """The march runs packets of rays through vectorised lane loops (and a scalar remainder loop) in tiles of
+    pixels: a pixel marched alone (lane 0 of a one-lane packet) gets the same bits as inside a full frame,
+    whose size (27 x 19) leaves partial tiles on the right and at the bottom."""
     import dataclasses
 
     from vlref.bench.config import bench_scene
     from vlref.march.patterns import offsets
     from vlref.render import prepare_frame
 
-    base = bench_scene(24, 16, 8, "four", 64)
+    base = bench_scene(27, 19, 8, "four", 64)
     scene = dataclasses.replace(base, render=dataclasses.replace(base.render, precision=precision))
     frame = prepare_frame(scene)
     dtype = np.dtype(precision)
     dirs = frame.camera.ray_directions().astype(dtype)
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance).astype(dtype)
-    beta = offsets("bayer4", 24, 16, 0).astype(dtype)
+    beta = offsets("bayer4", 27, 19, 0).astype(dtype)
     origin = np.asarray(frame.camera.position, dtype=dtype)
     args = (pack_medium(scene, dtype), frame.lights.astype(dtype), frame.shadow_maps().table, frame.geometry.arrays,
             True, 3)
-    per = np.zeros((4, 16, 24, 3), dtype=dtype)
-    trans = np.empty((16, 24), dtype=dtype)
+    per = np.zeros((4, 19, 27, 3), dtype=dtype)
+    trans = np.full((19, 27), np.nan, dtype=dtype)
     march_physical(origin, dirs, t_end, beta, 8, *args, per, trans)
     assert per.max() > 0 and np.count_nonzero(per.sum(axis=-1), axis=(1, 2)).min() > 20
+    assert 27 % TILE_W and 19 % TILE_H and not np.isnan(trans).any()  # partial tiles, and every pixel marched
     # no light traces shadow rays: the kernel compiled without the ray tracer (geo None) gives the same bits
     lean, lean_t = np.zeros_like(per), np.empty_like(trans)
     march_physical(origin, dirs, t_end, beta, 8, *args[:3], None, *args[4:], lean, lean_t)
     assert np.array_equal(lean, per) and np.array_equal(lean_t, trans)
-    for i in range(16):
-        for j in range(24):
+    for i in range(19):
+        for j in range(27):
             one = np.zeros((4, 1, 1, 3), dtype=dtype)
             one_t = np.empty((1, 1), dtype=dtype)
             march_physical(origin, np.ascontiguousarray(dirs[i:i + 1, j:j + 1]),

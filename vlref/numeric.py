@@ -5,7 +5,8 @@ written out so that LLVM can vectorise the loops that call them.
 the argument is reduced as ``x = n ln2 + r``, ``n = round(x / ln2)``, ``|r| <= ln2/2``, with ``ln2`` split in
 two parts (Cody & Waite 1980, *Software Manual for the Elementary Functions*; the split constants are
 fdlibm's ``ln2_hi``/``ln2_lo``), then ``p = e^r - 1`` is the Taylor polynomial of degree 13 (truncation below
-``0.35^14/14! ≈ 4e-18``) and
+``0.35^14/14! ≈ 4e-18``), ``p = r + r² q(r)`` with ``q`` evaluated by Estrin's scheme (pairs of terms, then
+pairs of pairs: a dependency chain of four multiply-adds where Horner's rule has eleven), and
 
     exp(x)   = 2^n + 2^n p
     expm1(x) = p                      (n = 0: r = x exactly, so small arguments keep their relative accuracy)
@@ -63,18 +64,13 @@ def _reduced(x):
     nf = k - _SHIFTER
     n = np.float64(k).view(np.int64) - _SHIFTER_BITS
     r = (x - nf * _LN2_HI) - nf * _LN2_LO
-    q = _C12 + r * _C13
-    q = _C11 + r * q
-    q = _C10 + r * q
-    q = _C9 + r * q
-    q = _C8 + r * q
-    q = _C7 + r * q
-    q = _C6 + r * q
-    q = _C5 + r * q
-    q = _C4 + r * q
-    q = _C3 + r * q
-    q = _C2 + r * q
-    p = r + (r * r) * q
+    # Estrin's scheme: four multiply-add levels deep instead of Horner's eleven (the lanes' loops are bound by
+    # this chain's latency)
+    r2 = r * r
+    r4 = r2 * r2
+    q = (((_C2 + _C3 * r) + (_C4 + _C5 * r) * r2) + ((_C6 + _C7 * r) + (_C8 + _C9 * r) * r2) * r4) \
+        + ((_C10 + _C11 * r) + (_C12 + _C13 * r) * r2) * (r4 * r4)
+    p = r + r2 * q
     two_n = np.int64((n + 1023) << 52).view(np.float64)
     return n, two_n, p
 

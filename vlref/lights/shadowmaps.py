@@ -338,9 +338,11 @@ def pcf_taps(u, v, res):
 
 @njit(cache=True, fastmath=False, forceinline=True)
 def pcf_blend(data, base, k00, k10, k01, k11, w00, w10, w01, w11, d_ref):
-    """The PCF lit fraction of the taps of :func:`pcf_taps` (no transparent layer): ``Σ w [d_ref <= depth]``."""
-    return (w00 * (1.0 if d_ref <= data[base + k00] else 0.0) + w10 * (1.0 if d_ref <= data[base + k10] else 0.0)
-            + w01 * (1.0 if d_ref <= data[base + k01] else 0.0) + w11 * (1.0 if d_ref <= data[base + k11] else 0.0))
+    """The PCF lit fraction of the taps of :func:`pcf_taps` (no transparent layer): ``Σ w [d_ref <= depth]``
+    (selects, not products: the same sum). Unsigned ``base`` and offsets index without the wrap-around of
+    negative indices."""
+    return ((w00 if d_ref <= data[base + k00] else 0.0) + (w10 if d_ref <= data[base + k10] else 0.0)
+            + (w01 if d_ref <= data[base + k01] else 0.0) + (w11 if d_ref <= data[base + k11] else 0.0))
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

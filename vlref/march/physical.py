@@ -57,7 +57,7 @@ reused for the larger end. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``
 needs. These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against
 the per-step ``exp`` form).
 
-Determinism: threads take tasks of pixels (:mod:`vlref.parallel`), each task writes only its own pixels,
+Determinism: threads take tasks, tiles of pixels (:mod:`vlref.parallel`), each task writes only its own pixels,
 no cross-pixel reduction; a lane's arithmetic does not depend on the other lanes of its packet: the same
 bits for any thread count and any order in which the tasks are taken.
 """
@@ -77,16 +77,20 @@ from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, 
                                  apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
-                      fog_exponent, height_exponent, optical_depth)
+                      fog_exponent, height_exponent, optical_depth,
+                      smooth_optical_depth)
 from ..numeric import cast, exp, expm1
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
 
-__all__ = ["march_physical", "LANES", "TASK"]
+__all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
 
 LANES = 64  # (pixel, light) pairs per packet
-TASK = 2 * LANES  # pixels per task (the threads take tasks on demand: vlref.parallel.take)
+# a task (the threads take tasks on demand: vlref.parallel.take) is a tile of TILE_W x TILE_H pixels, two
+# packets of 8 x 8: neighbouring samples of a packet read neighbouring shadow-map texels (BENCHMARKS.md
+# "Tiles")
+TILE_W, TILE_H = 8, 16
 
 # offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM
 # sees every row apart and vectorises without run-time alias checks)
@@ -95,31 +99,41 @@ ROWS = 34
  R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(0, ROWS * LANES,
                                                                                                         LANES)
 # float64 rows: a spot light's shadow-map distance and PCF weights, as map_lit computes them (and the
-# int64 scratch ``taps`` holds the four texel offsets)
-QROWS = 6
-Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11 = range(0, QROWS * LANES, LANES)
+# uint64 scratch ``taps`` holds the four texel offsets)
+QROWS = 7
+Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def _setup(s, m, origin, dx, dy, dz, a, b, beta, steps, medium):
-    """Lane ``m``: the segment ``[a, b]``, its steps, the view transmittance to ``a`` and the fog's running
-    product (module docstring)."""
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _setup(s, n, origin, steps, medium):
+    """Lanes ``0..n-1``, whose rows ``R_A`` (``a``), ``R_D`` (``b``), ``R_B`` (``β``) and the direction hold
+    their segment: ``Δ`` replaces ``b``; the view transmittance to ``a``, the fog's running product and the
+    sums are set (module docstring). Lane loops: vectorised without noise."""
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero, one = cast(ox, 0.0), cast(ox, 1.0)
-    delta = (b - a) / cast(ox, steps)
-    s[R_A + m], s[R_D + m], s[R_B + m] = a, delta, beta
-    s[R_DX + m], s[R_DY + m], s[R_DZ + m] = dx, dy, dz
-    s[R_TRANS + m] = exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, a, steps))
-    e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
-    e_last = fog_exponent(mp, oy + (a + (cast(ox, steps - 1) + beta) * delta) * dy)
+    fsteps = cast(ox, steps)
+    for m in range(n):
+        s[R_D + m] = (s[R_D + m] - s[R_A + m]) / fsteps
+    if mp[M_NOISE] != zero:
+        for m in range(n):
+            s[R_TRANS + m] = exp(-optical_depth(mp, lattice, ox, oy, oz, s[R_DX + m], s[R_DY + m], s[R_DZ + m],
+                                                zero, s[R_A + m], steps))
+    else:
+        for m in range(n):
+            s[R_TRANS + m] = exp(-smooth_optical_depth(mp, ox, oy, oz, s[R_DX + m], s[R_DY + m], s[R_DZ + m],
+                                                       zero, s[R_A + m]))
     cap = cast(ox, FOG_MAX_EXPONENT)
-    geometric = (mp[M_FOG] != zero and mp[M_NOISE] == zero and max(e_first, e_last) < cap
-                 and min(e_first, e_last) > -cap)
-    s[R_GEOM + m] = one if geometric else zero
-    s[R_FOG + m] = exp(e_first) if geometric else one
-    s[R_FOGQ + m] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
-    s[R_AR + m] = s[R_AG + m] = s[R_AB + m] = zero
+    smooth_fog = mp[M_FOG] != zero and mp[M_NOISE] == zero
+    for m in range(n):
+        a, delta, beta, dy = s[R_A + m], s[R_D + m], s[R_B + m], s[R_DY + m]
+        e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
+        e_last = fog_exponent(mp, oy + (a + (fsteps - one + beta) * delta) * dy)
+        geometric = smooth_fog and max(e_first, e_last) < cap and min(e_first, e_last) > -cap
+        s[R_GEOM + m] = one if geometric else zero
+        s[R_FOG + m] = exp(e_first) if geometric else one
+        s[R_FOGQ + m] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
+        s[R_AR + m] = s[R_AG + m] = s[R_AB + m] = zero
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -242,9 +256,12 @@ def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
     light's PCF lookup without a transparent layer has its map coordinates, weights and texel offsets computed
-    in one vectorised loop (float64 rows of ``q``, ``taps``) and its four depth reads in a second loop without
-    branches (gathers where the CPU has them: AVX-512; one loop for both was slower on an AVX2 machine). Every
-    other lookup is :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
+    in one vectorised loop (float64 rows of ``q``, ``taps``), its four depth reads in a second loop that writes
+    every lane's lit fraction (no branch: a read skipped for lanes that scatter nothing made the loop branch on
+    every lane, and the lit fraction a row of its own keeps LLVM from moving the reads back under the
+    condition), and ``V`` in a third, vectorised loop. LLVM keeps the reads scalar on AVX-512 too (its cost
+    model for Zen 4 and Sapphire Rapids emits no gathers). Every other lookup is
+    :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
@@ -257,7 +274,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
         ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
         dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
         tan_half = float(lf[k, F_TAN_HALF])
-        res, base = sm_i[k, S_RES], sm_i[k, S_OFFSET]
+        res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
         for m in range(n):
             u, v, d_ref, ahead = spot_map_coords(float(s[R_X + m]) - px, float(s[R_Y + m]) - py,
                                                  float(s[R_Z + m]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
@@ -266,13 +283,16 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             q[Q_DREF + m] = d_ref
             q[Q_AHEAD + m] = 1.0 if ahead else 0.0
             q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m] = w00, w10, w01, w11
-            taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m] = k00, k10, k01, k11
-        # every lane reads its taps (always inside the map: pcf_taps clamps them), so the loop has no branch
-        # and the four reads vectorise as gathers; lanes that scatter nothing keep V = 1
+            taps[m], taps[1 * LANES + m] = np.uint64(k00), np.uint64(k10)
+            taps[2 * LANES + m], taps[3 * LANES + m] = np.uint64(k01), np.uint64(k11)
+        # every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that scatter nothing
+        # keep V = 1 in the loop after
         for m in range(n):
-            lit = pcf_blend(data, base, taps[m], taps[1 * LANES + m], taps[2 * LANES + m], taps[3 * LANES + m],
-                            q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m], q[Q_DREF + m])
-            fr, _, _ = apply_strength(strength, lit, lit, lit)
+            q[Q_LIT + m] = pcf_blend(data, ubase, taps[m], taps[1 * LANES + m], taps[2 * LANES + m],
+                                     taps[3 * LANES + m], q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m],
+                                     q[Q_DREF + m])
+        for m in range(n):
+            fr, _, _ = apply_strength(strength, q[Q_LIT + m], q[Q_LIT + m], q[Q_LIT + m])
             used = q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero
             v = cast(one, fr) if used else one
             s[R_VR + m], s[R_VG + m], s[R_VB + m] = v, v, v
@@ -337,30 +357,33 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows, geo,
                  per_light, transmittance):
-    """Take tasks of ``TASK`` pixels (:func:`vlref.parallel.take` on ``taken``) until none is left; per task,
-    its pixels' transmittance, then per light its pairs with a non-empty segment in packets of up to ``LANES``
-    (module docstring)."""
+    """Take tasks, tiles of ``TILE_W x TILE_H`` pixels in row-major order of tiles (:func:`vlref.parallel.take`
+    on ``taken``), until none is left; per task, its pixels' transmittance, then per light its pairs with a
+    non-empty segment in packets of up to ``LANES``, set up by :func:`_setup` (module docstring)."""
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     h, w = t_end.shape
     zero = cast(ox, 0.0)
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
-    taps = np.empty(4 * LANES, dtype=np.int64)
+    taps = np.empty(4 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
+    tiles_x = (w + TILE_W - 1) // TILE_W
+    tiles = tiles_x * ((h + TILE_H - 1) // TILE_H)
     while True:
         task = take(taken)
-        p_start, p_end = task * TASK, min(h * w, (task + 1) * TASK)
-        if p_start >= p_end:
+        if task >= tiles:
             return
-        for p in range(p_start, p_end):
-            i, j = p // w, p % w
-            transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
-                                                     dirs[i, j, 2], zero, t_end[i, j], steps))
+        i0, j0 = (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
+        i1, j1 = min(h, i0 + TILE_H), min(w, j0 + TILE_W)
+        for i in range(i0, i1):
+            for j in range(j0, j1):
+                transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
+                                                         dirs[i, j, 2], zero, t_end[i, j], steps))
         for k in range(lights.ints.shape[0]):
             n = np.int64(0)  # not the literal 0: _march_packet would compile a second time for Literal[int](0)
-            for p in range(p_start, p_end):
-                i, j = p // w, p % w
+            for p in range((i1 - i0) * (j1 - j0)):
+                i, j = i0 + p // (j1 - j0), j0 + p % (j1 - j0)
                 dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
                 a, b = light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end[i, j])
                 if b > a:
@@ -368,14 +391,17 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
                 if b <= a:
                     per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = zero
                     continue
-                _setup(s, n, origin, dx, dy, dz, a, b, offsets[i, j], steps, medium)
-                pix[n] = p
+                s[R_A + n], s[R_D + n], s[R_B + n] = a, b, offsets[i, j]
+                s[R_DX + n], s[R_DY + n], s[R_DZ + n] = dx, dy, dz
+                pix[n] = i * w + j
                 n += 1
                 if n == LANES:
+                    _setup(s, n, origin, steps, medium)
                     _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo,
                                   light_extinction, leg_steps, per_light)
                     n = np.int64(0)
             if n > 0:
+                _setup(s, n, origin, steps, medium)
                 _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
                               leg_steps, per_light)
 
@@ -392,7 +418,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").
 
-    The pixels are split in tasks of ``TASK`` consecutive pixels. The threads of a ``prange`` over
+    The pixels are split in tasks, tiles of ``TILE_W x TILE_H`` pixels. The threads of a ``prange`` over
     :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
     pixel's cost varies from nothing to hundreds of samples, and ``prange``'s own split is static), each
     marched in packets of up to ``LANES`` (pixel, light) pairs. The workers get the arrays without reference
