@@ -56,6 +56,21 @@ def test_rays_go_through_pixel_centres_with_row_zero_at_the_top():
     assert (d[0] @ up).min() > (d[-1] @ up).max()  # top row looks up
 
 
+def test_rays_are_computed_once_per_size_and_handed_out_as_copies():
+    import pickle
+
+    cam = make_camera(w=8, h=6)
+    first = cam.ray_directions()
+    first[...] = 0.0  # the caller's array is its own: the camera's stays intact
+    again = cam.ray_directions()
+    fresh = make_camera(w=8, h=6).ray_directions()
+    assert np.array_equal(again, fresh) and again.flags.writeable
+    assert np.array_equal(cam.ray_directions(4, 3), make_camera(w=8, h=6).ray_directions(4, 3))
+    assert set(cam._rays) == {(8, 6), (4, 3)}
+    copy = pickle.loads(pickle.dumps(cam))  # the stored rays do not travel (Dask workers get small cameras)
+    assert copy._rays == {} and np.array_equal(copy.ray_directions(), fresh)
+
+
 def test_eye_depth_to_distance_round_trip():
     cam = make_camera()
     d = cam.ray_directions()

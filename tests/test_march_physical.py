@@ -334,11 +334,12 @@ def test_a_pixel_does_not_depend_on_its_packet(precision):
     origin = np.asarray(frame.camera.position, dtype=dtype)
     args = (pack_medium(scene, dtype), frame.lights.astype(dtype), frame.shadow_maps().table, frame.geometry.arrays,
             True, 3)
-    per = np.zeros((4, 19, 27, 3), dtype=dtype)
+    per = np.full((4, 19, 27, 3), np.nan, dtype=dtype)
     trans = np.full((19, 27), np.nan, dtype=dtype)
     march_physical(origin, dirs, t_end, beta, 8, *args, per, trans)
+    assert 27 % TILE_W and 19 % TILE_H  # partial tiles
+    assert not np.isnan(trans).any() and not np.isnan(per).any()  # the march writes every pixel of every light
     assert per.max() > 0 and np.count_nonzero(per.sum(axis=-1), axis=(1, 2)).min() > 20
-    assert 27 % TILE_W and 19 % TILE_H and not np.isnan(trans).any()  # partial tiles, and every pixel marched
     # no light traces shadow rays: the kernel compiled without the ray tracer (geo None) gives the same bits
     lean, lean_t = np.zeros_like(per), np.empty_like(trans)
     march_physical(origin, dirs, t_end, beta, 8, *args[:3], None, *args[4:], lean, lean_t)

@@ -21,7 +21,7 @@ Conventions (``docs/CONVENTIONS.md``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -78,6 +78,11 @@ class Camera:
     height: int
     near: float
     far: float
+    # ray_directions per target size, computed once (the camera is immutable); not pickled, not compared
+    _rays: dict = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "_rays": {}}
 
     @property
     def forward(self) -> np.ndarray:
@@ -131,15 +136,24 @@ class Camera:
         return np.broadcast_to(xs[None, :], (h, w)), np.broadcast_to(ys[:, None], (h, w))
 
     def ray_directions(self, width: int | None = None, height: int | None = None) -> np.ndarray:
-        """Unit world directions through pixel centres, (H, W, 3) float64.
+        """Unit world directions through pixel centres, (H, W, 3) float64 (a new array on every call).
 
-        ``width``/``height`` give the rays of a reduced-resolution target covering the same frustum.
+        ``width``/``height`` give the rays of a reduced-resolution target covering the same frustum. The
+        directions of each size are computed once per camera and copied out (at 1080p the computation takes
+        0.08-0.4 s of one core, the copy about 0.01 s: a frame re-rendered with other settings, as a
+        notebook's sliders do, would otherwise repeat it serially before every march).
         """
-        nx, ny = self.pixel_ndc(width, height)
-        t = self.tan_half_fov
-        v = np.stack([nx * t * self.aspect, ny * t, np.ones_like(nx)], axis=-1)
-        d = v @ self.rotation.T
-        return d / np.linalg.norm(d, axis=-1, keepdims=True)
+        key = (self.width if width is None else width, self.height if height is None else height)
+        rays = self._rays.get(key)
+        if rays is None:
+            nx, ny = self.pixel_ndc(width, height)
+            t = self.tan_half_fov
+            v = np.stack([nx * t * self.aspect, ny * t, np.ones_like(nx)], axis=-1)
+            d = v @ self.rotation.T
+            rays = d / np.linalg.norm(d, axis=-1, keepdims=True)
+            rays.flags.writeable = False
+            self._rays[key] = rays
+        return rays.copy()
 
     def world_to_ndc(self, points: np.ndarray, convention: str = "d3d") -> np.ndarray:
         """World points (..., 3) to NDC (..., 3) (x, y in [-1, 1] on screen, z per convention)."""

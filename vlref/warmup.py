@@ -22,9 +22,10 @@ frame that needs none of them (no objects, no shadow maps: the same array types,
 main process picks it up from the cache when it reaches the march (the frame reports its shadow maps
 as built just before: ``Frame.tick``). The 1×1 frame keeps the lights' ``exact`` shadows, which choose
 the march's variant with the shadow-ray tracer (:func:`vlref.march.physical.march_physical`). Cold, the
-default scene renders in about 40 s on an idle 2-core box; the frame's kernels (about 38 s of compile)
-are now the longer half, the march without the ray tracer about 27 s (BENCHMARKS.md "Cold start" and
-"Scheduling, borrowed records, a leaner compile").
+default scene renders in 23–24 s on the idle 2-core dev box of 2026-11-25 (37–43 s on the slower one of
+2026-11-23, where the frame's kernels took about 38 s of compile, the longer half, and the march without
+the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Scheduling, borrowed records, a leaner compile" and
+"Tiles, Estrin's `exp`, a tighter PCF loop").
 """
 
 from __future__ import annotations

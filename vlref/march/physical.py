@@ -89,7 +89,7 @@ __all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
 LANES = 64  # (pixel, light) pairs per packet
 # a task (the threads take tasks on demand: vlref.parallel.take) is a tile of TILE_W x TILE_H pixels, two
 # packets of 8 x 8: neighbouring samples of a packet read neighbouring shadow-map texels (BENCHMARKS.md
-# "Tiles")
+# "Tiles, Estrin's `exp`, a tighter PCF loop")
 TILE_W, TILE_H = 8, 16
 
 # offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM

@@ -39,26 +39,29 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     """
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     h, w = gbuffer_distance.shape
-    dirs = camera.ray_directions(w, h).astype(dtype)
+    dirs = camera.ray_directions(w, h).astype(dtype, copy=False)
     t_end = np.minimum(gbuffer_distance, scene.render.max_distance).astype(dtype)
     beta = offsets(sampling, w, h, scene.render.seed).astype(dtype)
     medium = pack_medium(scene, dtype)
     packed = lights.astype(dtype)
-    per_light = np.zeros((packed.count, h, w, 3), dtype=dtype)
+    per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
     trans = np.empty((h, w), dtype=dtype)
     # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); each band's
-    # lights go to a contiguous buffer (the kernel's one array layout) copied into place. Pixels are
-    # independent, so the bands change no bit of the result.
+    # lights go to a contiguous buffer (the kernel's one array layout): the band of per_light itself where it
+    # is contiguous (one light), else a buffer copied into place. Pixels are independent, so the bands change
+    # no bit of the result.
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
     # (a second, smaller kernel; vlref.march.physical.march_physical)
     position = np.asarray(camera.position, dtype=dtype)
     per_band = SAMPLES_PER_BAND * numba.get_num_threads()
     for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band)):
-        band = np.zeros((packed.count, y1 - y0, w, 3), dtype=dtype)
+        view = per_light[:, y0:y1]
+        band = view if view.flags.c_contiguous else np.empty(view.shape, dtype=dtype)
         march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
                        shadow_maps.table, geo if shadow_maps.traces_rays else None, bool(scene.techniques.physical.light_extinction),
                        int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
-        per_light[:, y0:y1] = band
+        if band is not view:
+            per_light[:, y0:y1] = band
     return per_light, trans
 
 
