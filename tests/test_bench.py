@@ -43,6 +43,7 @@ def test_every_section_with_finite_positive_figures(report):
     assert {"one_spot", "four_lights"} <= set(report["march"])
     assert report["march"]["four_lights"]["samples"] > report["march"]["one_spot"]["samples"] > 0
     assert "1" in report["scaling"]["threads"]
+    assert isinstance(report["machine"]["llvm_cpu"], str) and report["machine"]["llvm_cpu"]
     ceiling = report["scaling"]["machine_ceiling"]
     assert set(ceiling) == {"scalar_exp", "vector_exp"}
     assert all(runs["1"]["efficiency"] == 1.0 and runs["1"]["exp_per_s"] > 0 for runs in ceiling.values())

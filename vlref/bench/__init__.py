@@ -2,7 +2,9 @@
 
 Sections of the report (``--json`` prints it as one JSON object; keys as below):
 
-``machine``       CPU model, cores, Numba threads, Python/NumPy/Numba versions, date, command.
+``machine``       CPU model, the CPU LLVM compiles for (``llvm_cpu``: its tuning sets the vector width) and whether
+                  ``NUMBA_CPU_FEATURES`` overrides its features, cores, Numba threads, Python/NumPy/Numba
+                  versions, date, command.
 ``march``         the physical march kernel (:func:`vlref.techniques.physical.render`, float64) on the
                   benchmark scene (:func:`bench_scene`): (a) ``one_spot`` -- one spot light with a PCF
                   shadow map, HG ``g = 0.5``, extinction on the view ray and on the light leg, height fog;

@@ -8,6 +8,7 @@ import os
 import platform
 from pathlib import Path
 
+import llvmlite.binding as llvm
 import numba
 import numpy as np
 
@@ -67,7 +68,11 @@ def machine_info(argv: list[str]) -> dict:
     except OSError:
         pass
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
-    return {"cpu_model": model, "cores_available": cores, "cpu_count": os.cpu_count(),
+    # the CPU LLVM compiles for: its tuning sets the vector width (Intel server cores: 256-bit even with
+    # AVX-512; BENCHMARKS.md "Wider vectors"), so two machines' figures compare only with it
+    llvm_cpu = numba.config.CPU_NAME or llvm.get_host_cpu_name()
+    return {"cpu_model": model, "llvm_cpu": llvm_cpu, "cpu_features_set": bool(numba.config.CPU_FEATURES),
+            "cores_available": cores, "cpu_count": os.cpu_count(),
             "numba_threads": numba.get_num_threads(), "numba_num_threads": numba.config.NUMBA_NUM_THREADS,
             "threading_layer": os.environ.get("NUMBA_THREADING_LAYER", "default"),
             "python": platform.python_version(), "numpy": np.__version__, "numba": numba.__version__,
@@ -105,7 +110,7 @@ def _fmt(x) -> str:
 def format_report(r: dict) -> str:
     """A plain-text summary of the report."""
     m = r["machine"]
-    lines = [f"vlref bench  {m['date']}", f"machine: {m['cpu_model']}, {m['cores_available']} cores, "
+    lines = [f"vlref bench  {m['date']}", f"machine: {m['cpu_model']} (LLVM: {m['llvm_cpu']}), {m['cores_available']} cores, "
              f"{m['numba_threads']} Numba threads; numpy {m['numpy']}, numba {m['numba']}, python {m['python']}", ""]
     for name, s in r["march"].items():
         lines.append(f"march {name:12s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "
