@@ -110,7 +110,8 @@ def _fmt(x) -> str:
 def format_report(r: dict) -> str:
     """A plain-text summary of the report."""
     m = r["machine"]
-    lines = [f"vlref bench  {m['date']}", f"machine: {m['cpu_model']} (LLVM: {m['llvm_cpu']}), {m['cores_available']} cores, "
+    lines = [f"vlref bench  {m['date']}",
+             f"machine: {m['cpu_model']} (LLVM: {m['llvm_cpu']}), {m['cores_available']} cores, "
              f"{m['numba_threads']} Numba threads; numpy {m['numpy']}, numba {m['numba']}, python {m['python']}", ""]
     for name, s in r["march"].items():
         lines.append(f"march {name:12s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "

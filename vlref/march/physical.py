@@ -77,8 +77,7 @@ from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, 
                                  apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
-                      fog_exponent, height_exponent, optical_depth,
-                      smooth_optical_depth)
+                      fog_exponent, height_exponent, optical_depth, smooth_optical_depth)
 from ..numeric import cast, exp, expm1
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
@@ -115,7 +114,7 @@ def _setup(s, n, origin, steps, medium):
     fsteps = cast(ox, steps)
     for m in range(n):
         s[R_D + m] = (s[R_D + m] - s[R_A + m]) / fsteps
-    if mp[M_NOISE] != zero:
+    if mp[M_NOISE] != zero:  # optical_depth's sub-step loop; without noise its closed form, a vectorised loop
         for m in range(n):
             s[R_TRANS + m] = exp(-optical_depth(mp, lattice, ox, oy, oz, s[R_DX + m], s[R_DY + m], s[R_DZ + m],
                                                 zero, s[R_A + m], steps))
@@ -382,24 +381,24 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
                                                          dirs[i, j, 2], zero, t_end[i, j], steps))
         for k in range(lights.ints.shape[0]):
             n = np.int64(0)  # not the literal 0: _march_packet would compile a second time for Literal[int](0)
-            for p in range((i1 - i0) * (j1 - j0)):
-                i, j = i0 + p // (j1 - j0), j0 + p % (j1 - j0)
-                dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
-                a, b = light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end[i, j])
-                if b > a:
-                    a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, a, b)
-                if b <= a:
-                    per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = zero
-                    continue
-                s[R_A + n], s[R_D + n], s[R_B + n] = a, b, offsets[i, j]
-                s[R_DX + n], s[R_DY + n], s[R_DZ + n] = dx, dy, dz
-                pix[n] = i * w + j
-                n += 1
-                if n == LANES:
-                    _setup(s, n, origin, steps, medium)
-                    _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo,
-                                  light_extinction, leg_steps, per_light)
-                    n = np.int64(0)
+            for i in range(i0, i1):
+                for j in range(j0, j1):
+                    dx, dy, dz = dirs[i, j, 0], dirs[i, j, 1], dirs[i, j, 2]
+                    a, b = light_segment(lights, k, ox, oy, oz, dx, dy, dz, t_end[i, j])
+                    if b > a:
+                        a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, a, b)
+                    if b <= a:
+                        per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = zero
+                        continue
+                    s[R_A + n], s[R_D + n], s[R_B + n] = a, b, offsets[i, j]
+                    s[R_DX + n], s[R_DY + n], s[R_DZ + n] = dx, dy, dz
+                    pix[n] = i * w + j
+                    n += 1
+                    if n == LANES:
+                        _setup(s, n, origin, steps, medium)
+                        _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo,
+                                      light_extinction, leg_steps, per_light)
+                        n = np.int64(0)
             if n > 0:
                 _setup(s, n, origin, steps, medium)
                 _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shadows, geo, light_extinction,
