@@ -67,6 +67,8 @@ def test_rays_are_computed_once_per_size_and_handed_out_as_copies():
     assert np.array_equal(again, fresh) and again.flags.writeable
     assert np.array_equal(cam.ray_directions(4, 3), make_camera(w=8, h=6).ray_directions(4, 3))
     assert set(cam._rays) == {(8, 6), (4, 3)}
+    shared = cam.ray_directions(copy=False)  # the camera's own array, for a reader: the same one on every call
+    assert shared is cam.ray_directions(copy=False) and np.array_equal(shared, fresh)
     copy = pickle.loads(pickle.dumps(cam))  # the stored rays do not travel (Dask workers get small cameras)
     assert copy._rays == {} and np.array_equal(copy.ray_directions(), fresh)
 

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 
 from post_cases import image, sizes
 from vlref.post.composite import (blend_add_fp16, composite_add, composite_physical, composite_urp, composite_vl,
-                                  fp16, unorm8, unorm16)
+                                  fp16, sum_lights, unorm8, unorm16)
 
 
 @given(sizes(2, 8))
@@ -29,6 +29,33 @@ def test_composites_per_pixel(case):
                 assert add[r, c, ch] == scene[r, c, ch] + F[r, c] * 0.8
             assert vl4[r, c, 3] == scene[r, c, 3] * T[r, c]
     assert vl3.shape == (H, W, 3)
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("n", [0, 1, 2, 4])
+def test_sum_lights_adds_in_light_order(n, dtype):
+    """The sum of the lights' in-scattering: ((L_0 + L_1) + L_2) + ... in the buffers' precision, element by
+    element (the same bits as NumPy's sum over the first axis); zeros without lights."""
+    rng = np.random.default_rng(n)
+    per_light = (rng.random((n, 7, 5, 3)) * 10.0 ** rng.integers(-8, 8, (n, 7, 5, 3))).astype(dtype)
+    got = sum_lights(per_light)
+    assert got.dtype == dtype and got.shape == (7, 5, 3)
+    want = np.zeros((7, 5, 3), dtype)
+    if n:
+        want = per_light[0].copy()
+        for k in range(1, n):
+            want = want + per_light[k]
+    assert got.tobytes() == want.tobytes()
+    assert got.tobytes() == per_light.sum(axis=0).tobytes()
+
+
+def test_composite_physical_promotes_float32_buffers():
+    """float32 march buffers over a float64 scene composite in float64, as NumPy promotes them."""
+    rng = np.random.default_rng(3)
+    scene, L, T = rng.random((4, 6, 3)), rng.random((4, 6, 3)).astype(np.float32), rng.random((4, 6)).astype(np.float32)
+    got = composite_physical(scene, T, L)
+    assert got.dtype == np.float64
+    assert got.tobytes() == (scene * T[:, :, None] + L).tobytes()
 
 
 def test_fp16_rounding():
@@ -65,3 +92,5 @@ def test_bad_shapes_raise():
         composite_vl(np.zeros((2, 2, 3)), np.zeros((2, 2, 3)))
     with pytest.raises(ValueError):
         composite_physical(np.zeros((2, 2, 3)), np.zeros((3, 2)), np.zeros((2, 2, 3)))
+    with pytest.raises(ValueError, match="inscatter"):
+        composite_physical(np.zeros((2, 2, 3)), np.zeros((2, 2)), np.zeros((2, 3, 3)))

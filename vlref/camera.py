@@ -135,13 +135,15 @@ class Camera:
         ys = 1.0 - (np.arange(h) + 0.5) / h * 2.0
         return np.broadcast_to(xs[None, :], (h, w)), np.broadcast_to(ys[:, None], (h, w))
 
-    def ray_directions(self, width: int | None = None, height: int | None = None) -> np.ndarray:
+    def ray_directions(self, width: int | None = None, height: int | None = None, copy: bool = True) -> np.ndarray:
         """Unit world directions through pixel centres, (H, W, 3) float64 (a new array on every call).
 
         ``width``/``height`` give the rays of a reduced-resolution target covering the same frustum. The
         directions of each size are computed once per camera and copied out (at 1080p the computation takes
         0.08-0.4 s of one core, the copy about 0.01 s: a frame re-rendered with other settings, as a
-        notebook's sliders do, would otherwise repeat it serially before every march).
+        notebook's sliders do, would otherwise repeat it serially before every march). ``copy=False`` hands
+        out the camera's own array, for a caller that only reads it (the physical march: the copy was a
+        twentieth of a 16-core 1080p frame); writing to it changes every later call's rays.
         """
         key = (self.width if width is None else width, self.height if height is None else height)
         rays = self._rays.get(key)
@@ -151,9 +153,8 @@ class Camera:
             v = np.stack([nx * t * self.aspect, ny * t, np.ones_like(nx)], axis=-1)
             d = v @ self.rotation.T
             rays = d / np.linalg.norm(d, axis=-1, keepdims=True)
-            rays.flags.writeable = False
             self._rays[key] = rays
-        return rays.copy()
+        return rays.copy() if copy else rays
 
     def world_to_ndc(self, points: np.ndarray, convention: str = "d3d") -> np.ndarray:
         """World points (..., 3) to NDC (..., 3) (x, y in [-1, 1] on screen, z per convention)."""

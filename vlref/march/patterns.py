@@ -13,6 +13,8 @@ An offset ``β ∈ [0, 1)`` moves the first sample of a pixel's ray ``β`` steps
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from numba import njit
 
@@ -50,6 +52,14 @@ def _hash_offsets(width, height, seed):
     return out
 
 
+@functools.lru_cache(maxsize=None)
+def _bayer_offsets(n: int) -> np.ndarray:
+    """``bayer_matrix(n) / n²`` (read-only: one per size, shared by every frame)."""
+    b = bayer_matrix(n) / float(n * n)
+    b.flags.writeable = False
+    return b
+
+
 def offsets(pattern: str, width: int, height: int, seed: int = 0) -> np.ndarray:
     """The (height, width) float64 offset buffer of ``pattern`` (row 0 at the top)."""
     if pattern == "none":
@@ -58,6 +68,6 @@ def offsets(pattern: str, width: int, height: int, seed: int = 0) -> np.ndarray:
         return _hash_offsets(width, height, seed)
     if pattern.startswith("bayer"):
         n = int(pattern[5:])
-        b = bayer_matrix(n) / float(n * n)
+        b = _bayer_offsets(n)
         return np.tile(b, (height // n + 1, width // n + 1))[:height, :width].copy()
     raise ValueError(f"unknown sampling pattern {pattern!r}; use one of {PATTERNS}")

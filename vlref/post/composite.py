@@ -20,6 +20,7 @@ Storage rounding (SOURCES §6.9) -- apply after the pass that writes the buffer:
 from __future__ import annotations
 
 import numpy as np
+from numba import njit, prange
 
 from vlref.post.resolution import check_choice
 
@@ -35,9 +36,57 @@ def _per_pixel(a, like: np.ndarray) -> np.ndarray:
 
 
 def composite_physical(scene, transmittance, inscatter) -> np.ndarray:
-    """``final = scene * T + L`` (the physical profile and the thesis): ``T`` (H, W), ``scene``, ``L`` (H, W, 3)."""
-    scene = np.asarray(scene, dtype=np.float64)
-    return scene * _per_pixel(transmittance, scene) + np.asarray(inscatter, dtype=np.float64)
+    """``final = scene * T + L`` (the physical profile and the thesis): ``T`` (H, W), ``scene``, ``L`` (H, W, 3);
+    float64, the same bits as NumPy's ``scene * T[..., None] + L``, rows in parallel (a frame's compositing
+    ran on one core: BENCHMARKS.md "The rest of a frame on every core")."""
+    scene = np.ascontiguousarray(scene, dtype=np.float64)
+    trans, light = _floats(transmittance), _floats(inscatter)  # float32 stays float32: promoted per element
+    if trans.shape != scene.shape[:2]:
+        raise ValueError(f"factor: per-pixel factor {trans.shape} does not match image {scene.shape[:2]}")
+    if light.shape != scene.shape:
+        raise ValueError(f"inscatter: shape {light.shape} does not match image {scene.shape}")
+    out = np.empty(scene.shape)
+    _composite(scene, trans, light, out)
+    return out
+
+
+def _floats(a) -> np.ndarray:
+    """``a`` as a contiguous float32 or float64 array (other types as float64)."""
+    a = np.ascontiguousarray(a)
+    return a if a.dtype in (np.float32, np.float64) else a.astype(np.float64)
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _composite(scene, trans, light, out):
+    h, w, c = out.shape
+    for i in prange(h):
+        for j in range(w):
+            for k in range(c):
+                out[i, j, k] = scene[i, j, k] * trans[i, j] + light[i, j, k]
+
+
+def sum_lights(per_light: np.ndarray) -> np.ndarray:
+    """``Σ_k per_light[k]`` over the first axis in light order (``((L_0 + L_1) + L_2) + …``, in the buffers'
+    dtype: the same bits as NumPy's ``per_light.sum(axis=0)``), rows in parallel; zeros without lights."""
+    per_light = np.ascontiguousarray(per_light)
+    out = np.empty(per_light.shape[1:], dtype=per_light.dtype)
+    if per_light.shape[0] == 0:
+        out[...] = 0
+    else:
+        _sum_lights(per_light.reshape(per_light.shape[0], per_light.shape[1], -1),
+                    out.reshape(per_light.shape[1], -1))
+    return out
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _sum_lights(per_light, out):
+    n, h, w = per_light.shape
+    for i in prange(h):
+        for j in range(w):
+            acc = per_light[0, i, j]
+            for k in range(1, n):
+                acc += per_light[k, i, j]
+            out[i, j] = acc
 
 
 def composite_vl(scene, volume) -> np.ndarray:

@@ -31,6 +31,7 @@ from ..froxel.grid import column_rays, grid_image, jitter_offsets, slice_depths
 from ..froxel.kernels import froxel_apply, froxel_integrate, froxel_scatter
 from ..froxel.temporal import History, reproject_blend, tile_depth
 from ..medium import pack_medium
+from ..post.composite import composite_physical
 from . import resolved
 
 __all__ = ["render", "grid_bounds"]
@@ -82,5 +83,5 @@ def render(scene, frame) -> dict:
     trans = np.empty((cam.height, cam.width))
     froxel_apply(integrated, bounds, frame.gbuffer.depth, inscatter, trans)
     out.update({"froxel_integrated": grid_image(integrated), "inscatter": inscatter, "transmittance": trans,
-                "final": frame.scene_colour * trans[:, :, None] + inscatter})
+                "final": composite_physical(frame.scene_colour, trans, inscatter)})
     return out

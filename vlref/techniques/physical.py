@@ -21,6 +21,7 @@ import numpy as np
 from ..march.patterns import offsets
 from ..march.physical import march_physical
 from ..medium import pack_medium
+from ..post.composite import composite_physical, sum_lights
 from ..progress import bands_for, row_bands
 from . import resolved
 
@@ -39,9 +40,9 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     """
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     h, w = gbuffer_distance.shape
-    dirs = camera.ray_directions(w, h).astype(dtype, copy=False)
-    t_end = np.minimum(gbuffer_distance, scene.render.max_distance).astype(dtype)
-    beta = offsets(sampling, w, h, scene.render.seed).astype(dtype)
+    dirs = camera.ray_directions(w, h, copy=False).astype(dtype, copy=False)  # read only
+    t_end = np.minimum(gbuffer_distance, scene.render.max_distance).astype(dtype, copy=False)
+    beta = offsets(sampling, w, h, scene.render.seed).astype(dtype, copy=False)
     medium = pack_medium(scene, dtype)
     packed = lights.astype(dtype)
     per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
@@ -50,15 +51,16 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     # lights go to a contiguous buffer (the kernel's one array layout): the band of per_light itself where it
     # is contiguous (one light), else a buffer copied into place. Pixels are independent, so the bands change
     # no bit of the result.
+    position = np.asarray(camera.position, dtype=dtype)
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
     # (a second, smaller kernel; vlref.march.physical.march_physical)
-    position = np.asarray(camera.position, dtype=dtype)
+    traced = geo if shadow_maps.traces_rays else None
     per_band = SAMPLES_PER_BAND * numba.get_num_threads()
     for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band)):
         view = per_light[:, y0:y1]
         band = view if view.flags.c_contiguous else np.empty(view.shape, dtype=dtype)
         march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
-                       shadow_maps.table, geo if shadow_maps.traces_rays else None, bool(scene.techniques.physical.light_extinction),
+                       shadow_maps.table, traced, bool(scene.techniques.physical.light_extinction),
                        int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
         if band is not view:
             per_light[:, y0:y1] = band
@@ -69,8 +71,8 @@ def render(scene, frame) -> dict[str, np.ndarray]:
     """``inscatter``, ``transmittance``, ``final`` and ``inscatter_light_<i>`` (module docstring)."""
     per_light, trans = march_buffers(scene, frame.camera, frame.gbuffer.distance, frame.lights, frame.shadow_maps(),
                                      frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
-    inscatter = per_light.sum(axis=0) if per_light.shape[0] else np.zeros(per_light.shape[1:], per_light.dtype)
+    inscatter = sum_lights(per_light)
     out = {"inscatter": inscatter, "transmittance": trans,
-           "final": frame.scene_colour * trans[:, :, None] + inscatter}
+           "final": composite_physical(frame.scene_colour, trans, inscatter)}
     out.update({f"inscatter_light_{k}": per_light[k] for k in range(per_light.shape[0])})
     return out
