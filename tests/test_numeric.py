@@ -8,7 +8,7 @@ import pytest
 from hypothesis import given, strategies as st
 from numba import njit
 
-from vlref.numeric import cast, exp, expm1
+from vlref.numeric import cast, exp, expm1, fma, prefer_wide_vectors
 
 
 @njit(cache=True)
@@ -70,3 +70,42 @@ def test_float32_arguments_give_the_rounded_float64_value():
 def test_cast_keeps_the_float_type():
     assert cast(np.float32(1.0), 2.5) == np.float32(2.5) and isinstance(cast(np.float32(1.0), 2.5), np.float32)
     assert isinstance(cast(1.0, 2), float)
+
+
+@njit(cache=True)
+def _fma_and_product(a, b, c):
+    return fma(a, b, c), a * b + c
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_fma_rounds_once(dtype):
+    """(1 + e)(1 - e) - 1 = -e² exactly with one rounding; the product rounded first gives 0."""
+    e = np.finfo(dtype).eps
+    fused, unfused = _fma_and_product(dtype(1 + e), dtype(1 - e), dtype(-1))
+    assert fused == -(np.float64(e) ** 2) and unfused == 0.0
+    assert type(fused) is type(unfused)
+
+
+@njit(fastmath=False)  # not cached: Numba inspects only code it compiled in this process
+def _scaled_exp_wide(xs, out):
+    prefer_wide_vectors()
+    for i in range(xs.size):
+        out[i] = exp(xs[i]) * 0.5 + xs[i]
+
+
+@njit(fastmath=False)
+def _scaled_exp(xs, out):
+    for i in range(xs.size):
+        out[i] = exp(xs[i]) * 0.5 + xs[i]
+
+
+def test_prefer_wide_vectors_marks_the_function_and_keeps_the_bits():
+    """The caller's LLVM function carries "prefer-vector-width"="512" (LLVM may use 512-bit vectors in its loops
+    where the CPU has them); what each lane computes does not change."""
+    xs = np.random.default_rng(5).uniform(-30.0, 30.0, 1003)
+    wide, narrow = np.empty_like(xs), np.empty_like(xs)
+    _scaled_exp_wide(xs, wide)
+    _scaled_exp(xs, narrow)
+    assert wide.tobytes() == narrow.tobytes()
+    assert '"prefer-vector-width"="512"' in _scaled_exp_wide.inspect_llvm(_scaled_exp_wide.signatures[0])
+    assert "prefer-vector-width" not in _scaled_exp.inspect_llvm(_scaled_exp.signatures[0])

@@ -37,18 +37,18 @@ march is float32 (constants through :func:`vlref.numeric.cast`, the HG value inc
 texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
 its own) and exact shadow rays (the geometry is float64).
 
-Evaluation (the same integral, rearranged for speed): the rays are marched in **packets** of up to
-``LANES`` (pixel, light) pairs that share a light: every pair takes exactly ``N`` steps, so the lanes
-of a packet stay in lockstep. Each step runs as a few *stages*, each a loop over the lanes that reads
-and writes one row per quantity of a per-thread scratch array (structure of arrays): positions,
-medium, the light's direction and distance law, cone, light leg, then phase and accumulation. A stage
-without table lookups or libm calls is vectorised by LLVM (4 lanes per AVX2 instruction, 8 with
-AVX-512); the stages that look things up — shadow maps and shadow rays, cookies, a Unity LUT, noise,
-the ``linear`` cone's ``acos`` — run lane by lane with the scalar helpers. ``exp`` and ``expm1`` are
-:func:`vlref.numeric.exp` / :func:`vlref.numeric.expm1` (≤ 1 / 2 ulp from libm; a libm call would keep
-the loop scalar). Vectorisation never changes a bit: without fast-math LLVM may not reorder
-arithmetic, and each lane computes what a scalar loop would. BENCHMARKS.md "Packets of rays" has the
-measurements.
+Evaluation (the same integral, rearranged for speed): the rays are marched in **packets** of up to ``LANES``
+(pixel, light) pairs that share a light: every pair takes exactly ``N`` steps, so the lanes of a packet stay
+in lockstep. Each step runs as a few *stages*, each a loop over the lanes that reads and writes one row per
+quantity of a per-thread scratch array (structure of arrays): positions, medium, the light's direction and
+distance law, cone, light leg, then phase and accumulation. A stage without table lookups or libm calls is
+vectorised by LLVM (4 lanes per AVX2 instruction, 8 with AVX-512: every function of the march asks for the
+widest vectors, :func:`vlref.numeric.prefer_wide_vectors`, which LLVM's tuning for Intel's server cores would
+otherwise cap at 256 bits); the stages that look things up — shadow maps and shadow rays, cookies, a Unity
+LUT, noise, the ``linear`` cone's ``acos`` — run lane by lane with the scalar helpers. ``exp`` and ``expm1``
+are :func:`vlref.numeric.exp` / :func:`vlref.numeric.expm1` (≤ 1 / 2 ulp from libm; a libm call would keep the
+loop scalar). Vectorisation never changes a bit: without fast-math LLVM may not reorder arithmetic, and each
+lane computes what a scalar loop would. BENCHMARKS.md "Packets of rays" has the measurements.
 
 In a noiseless height fog the fog exponent is linear in the step index, so the density is ``e^{e_0} q^i``
 (one multiply per step) unless a sample reaches ``FOG_MAX_EXPONENT``; the leg of a point/spot light in an
@@ -78,7 +78,7 @@ from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, 
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, optical_depth, smooth_optical_depth)
-from ..numeric import cast, exp, expm1
+from ..numeric import cast, exp, expm1, prefer_wide_vectors
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
@@ -108,6 +108,7 @@ def _setup(s, n, origin, steps, medium):
     """Lanes ``0..n-1``, whose rows ``R_A`` (``a``), ``R_D`` (``b``), ``R_B`` (``β``) and the direction hold
     their segment: ``Δ`` replaces ``b``; the view transmittance to ``a``, the fog's running product and the
     sums are set (module docstring). Lane loops: vectorised without noise."""
+    prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero, one = cast(ox, 0.0), cast(ox, 1.0)
@@ -141,6 +142,7 @@ def _medium_stage(s, n, i, origin, medium, geometric):
     ``geometric``: every lane takes the fog's running product.
     The vectorised loops read only scalars and ``s`` (an array read inside a lane loop costs reference
     counting calls, which keep the loop scalar)."""
+    prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     zero, one = cast(ox, 0.0), cast(ox, 1.0)
@@ -179,6 +181,7 @@ def _medium_stage(s, n, i, origin, medium, geometric):
 def _light_stage(s, n, lights, k):
     """Direction ``l`` toward light ``k``, distance and ``E`` without colour: distance law × cone (0 at the
     light's own position), then ``E`` per channel with the colour and the cookie."""
+    prefer_wide_vectors()
     li, lf = lights.ints, lights.floats
     kind, law, cone = li[k, I_KIND], li[k, I_ATT], li[k, I_CONE]
     zero, one = cast(lf[0, 0], 0.0), cast(lf[0, 0], 1.0)
@@ -230,6 +233,7 @@ def _light_stage(s, n, lights, k):
 def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
     """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form (vectorised), or
     :func:`~vlref.medium.optical_depth` lane by lane."""
+    prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     zero, one = cast(mp[0], 0.0), cast(mp[0], 1.0)
     st0 = mp[M_ST]
@@ -261,6 +265,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     condition), and ``V`` in a third, vectorised loop. LLVM keeps the reads scalar on AVX-512 too (its cost
     model for Zen 4 and Sapphire Rapids emits no gathers). Every other lookup is
     :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
+    prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
@@ -314,6 +319,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _accumulate_stage(s, n, g):
     """``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then ``T *= e^{-σt Δ}`` (module docstring)."""
+    prefer_wide_vectors()
     zero, one = cast(g, 0.0), cast(g, 1.0)
     for m in range(n):
         st, ss, em1, delta = s[R_ST + m], s[R_SS + m], s[R_EM1 + m], s[R_D + m]
@@ -334,6 +340,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
                   per_light):
     """March the ``n`` lanes set up in ``s`` (pixels ``pix``, image width ``w``) through light ``k`` and store
     their in-scattered radiance in ``per_light[k]`` (module docstring)."""
+    prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
@@ -359,6 +366,7 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
     """Take tasks, tiles of ``TILE_W x TILE_H`` pixels in row-major order of tiles (:func:`vlref.parallel.take`
     on ``taken``), until none is left; per task, its pixels' transmittance, then per light its pairs with a
     non-empty segment in packets of up to ``LANES``, set up by :func:`_setup` (module docstring)."""
+    prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     h, w = t_end.shape
