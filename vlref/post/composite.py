@@ -29,10 +29,14 @@ FP16_MAX = 65504.0
 
 def _per_pixel(a, like: np.ndarray) -> np.ndarray:
     """An (H, W) factor broadcast over the channel axis of ``like``."""
-    a = np.asarray(a, dtype=np.float64)
+    return _check_per_pixel(np.asarray(a, dtype=np.float64), like)[..., None]
+
+
+def _check_per_pixel(a: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """``a``, after checking that it is (H, W) of the image ``like``."""
     if a.shape != like.shape[:2]:
         raise ValueError(f"factor: per-pixel factor {a.shape} does not match image {like.shape[:2]}")
-    return a[..., None]
+    return a
 
 
 def composite_physical(scene, transmittance, inscatter) -> np.ndarray:
@@ -40,9 +44,8 @@ def composite_physical(scene, transmittance, inscatter) -> np.ndarray:
     float64, the same bits as NumPy's ``scene * T[..., None] + L``, rows in parallel (a frame's compositing
     ran on one core: BENCHMARKS.md "The rest of a frame on every core")."""
     scene = np.ascontiguousarray(scene, dtype=np.float64)
-    trans, light = _floats(transmittance), _floats(inscatter)  # float32 stays float32: promoted per element
-    if trans.shape != scene.shape[:2]:
-        raise ValueError(f"factor: per-pixel factor {trans.shape} does not match image {scene.shape[:2]}")
+    # float32 stays float32: promoted per element, as NumPy does
+    trans, light = _check_per_pixel(_floats(transmittance), scene), _floats(inscatter)
     if light.shape != scene.shape:
         raise ValueError(f"inscatter: shape {light.shape} does not match image {scene.shape}")
     out = np.empty(scene.shape)
