@@ -39,7 +39,7 @@ def test_a_render_larger_than_memory_is_refused_before_allocating(tmp_path):
               preexec_fn=_limit_address_space)
     assert r.returncode == 2, r.stderr
     line = r.stderr.strip().splitlines()[-1]
-    assert "pillars.toml: render.width: needs about " in line and " GB available" in line
+    assert "<command line>: --set render.height=16384: needs about " in line and " GB available" in line
     needed = float(line.split("needs about ")[1].split(" GB")[0])
     available = float(line.split(", ")[-1].split(" GB")[0])
     assert 16384 ** 2 * 200 / 1e9 < needed < 16384 ** 2 * 400 / 1e9 and available <= 16 * 2 ** 30 / 1e9 + 0.05
@@ -72,14 +72,33 @@ def test_an_unusable_output_is_refused_before_any_work(tmp_path, args):
     assert existing.read_text() == "keep me"
 
 
-def test_an_unwritable_output_folder_is_refused(tmp_path, monkeypatch):
-    """Permission bits do not bind root, so the refusal is tested with os.access answering 'no'."""
+def test_an_uncreatable_output_folder_is_refused_before_any_work(tmp_path):
+    """/proc refuses any new folder, root or not (os.access would say yes to root): exit 2 with the reason
+    before the render starts (no traceback, nothing written)."""
+    r = vlref("render", "-o", "/proc/vlref_out", "--set", "render.steps=4096", cwd=tmp_path)
+    assert r.returncode == 2, r.stderr
+    assert r.stderr.startswith("vlref: error: <command line>: output: cannot create /proc/vlref_out: "), r.stderr
+    assert "Traceback" not in r.stderr and list(tmp_path.iterdir()) == [] and not Path("/proc/vlref_out").exists()
+
+
+def test_an_unwritable_output_folder_is_refused_and_the_check_leaves_nothing(tmp_path, monkeypatch):
+    """The check creates the missing folders and a probe file in each, and removes them; a file system that
+    refuses the file (read-only: EROFS) is bad input, and the folders it made are gone again."""
+    import errno
+    import tempfile
+
     from vlref.errors import InputError
     from vlref.io import check_output_dir
 
-    monkeypatch.setattr(os, "access", lambda path, mode: Path(path) != tmp_path)
-    with pytest.raises(InputError, match=f"{tmp_path} is not writable"):
-        check_output_dir(tmp_path / "out")
+    assert check_output_dir(tmp_path / "a" / "b") == tmp_path and list(tmp_path.iterdir()) == []
+
+    def refuse(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(tempfile, "mkstemp", refuse)
+    with pytest.raises(InputError, match=f"cannot write {tmp_path / 'a' / 'b'}: Read-only file system"):
+        check_output_dir(tmp_path / "a" / "b")
+    assert list(tmp_path.iterdir()) == []
 
 
 # ---------------------------------------------------------------- 4: --set errors name the command line

@@ -45,3 +45,19 @@ def test_refusal_names_the_largest_part_and_both_figures():
         check_memory(small, available=1e9)
     assert exc.value.path == "lights[0].shadows.resolution"
     assert isinstance(check_memory(small, available=1e12), MemoryEstimate)
+
+
+def test_refusal_names_the_command_line_when_a_set_value_made_the_largest_part():
+    sets = ["render.width=4000", "render.height=4000"]
+    with pytest.raises(InputError) as exc:
+        check_memory(load_scene("pillars", sets), available=1e9, overrides=sets)
+    assert (exc.value.file, exc.value.path) == ("<command line>", "--set render.height=4000")
+    sets = ["render.width=16", "lights.0.shadows.resolution=8192"]
+    with pytest.raises(InputError) as exc:
+        check_memory(load_scene("pillars", sets), available=1e9, overrides=sets)
+    assert (exc.value.file, exc.value.path) == ("<command line>", "--set lights.0.shadows.resolution=8192")
+    sets = ["lights.0.intensity=5"]  # not what the estimate grows with: the scene file is named
+    scene = load_scene("pillars", ["render.width=4000", "render.height=4000"])
+    with pytest.raises(InputError) as exc:
+        check_memory(scene, available=1e9, overrides=sets)
+    assert (exc.value.file, exc.value.path) == (scene.source, "render.width")

@@ -11,7 +11,8 @@ an earlier item (a sweep point needs its reference).
 
 Schedulers (:func:`parse_scheduler`)
 ------------------------------------
-* ``None``: in this process, items in order, exceptions propagate (as without Dask);
+* ``None``: in this process, items in order; bad input (:class:`InputError`) stops the run as
+  :class:`ItemsFailed` naming the item, other exceptions propagate (as without Dask);
 * ``local`` / ``local:N``: a ``distributed.LocalCluster`` of N worker processes (default: one per
   core) with one Dask thread each, started for the run and closed after it;
 * ``tcp://host:port``: an existing Dask scheduler (its workers must import the same vlref).
@@ -207,17 +208,31 @@ def run_items(items: Sequence[Item], scheduler: str | None = None,
         raise ValueError("item keys must be unique")
     spec = parse_scheduler(scheduler)
     if spec is None:
-        needed = {a.key for item in items for a in item.args if isinstance(a, After)}
-        results: dict[str, Any] = {}
-        for item in items:
-            start = time.perf_counter()
-            result = item.fn(*_resolve(item.args, results), **item.kwargs)
-            on_result(item.key, result, time.perf_counter() - start)
-            if item.key in needed:
-                results[item.key] = result
+        _run_here(items, on_result, desc, quiet)
         return
     with _client(spec, quiet) as client:
         _run_on(client, items, on_result, desc, quiet)
+
+
+def _run_here(items: Sequence[Item], on_result, desc: str, quiet: bool) -> None:
+    """Run ``items`` in order in this process (a bar once they have run a second). Bad input stops the run as
+    :class:`ItemsFailed` naming the item; any other exception propagates as it is."""
+    from tqdm import tqdm
+
+    needed = {a.key for item in items for a in item.args if isinstance(a, After)}
+    results: dict[str, Any] = {}
+    with tqdm(total=len(items), desc=desc, unit="item", file=sys.stderr, delay=1.0, leave=False,
+              disable=quiet) as bar:
+        for item in items:
+            start = time.perf_counter()
+            try:
+                result = item.fn(*_resolve(item.args, results), **item.kwargs)
+            except InputError as exc:
+                raise ItemsFailed([(item.key, f"{type(exc).__name__}: {exc}")], True) from None
+            on_result(item.key, result, time.perf_counter() - start)
+            if item.key in needed:
+                results[item.key] = result
+            bar.update(1)
 
 
 def _run_on(client, items: Sequence[Item], on_result, desc: str, quiet: bool) -> None:

@@ -90,11 +90,25 @@ def _atomic_write(path: str | os.PathLike, write: Callable[[BinaryIO], None]) ->
     return path
 
 
+def _probe(folder: Path, key: str, target: Path) -> None:
+    """Create and remove a file in ``folder``: the only test of writability that holds for root too
+    (``os.access`` says yes to root even on a read-only or virtual file system)."""
+    try:
+        fd, name = tempfile.mkstemp(prefix=".vlref-probe.", dir=folder)
+        os.close(fd)
+        os.unlink(name)
+    except OSError as exc:
+        raise InputError("<command line>", key, f"cannot write {target}: {exc.strerror or exc} "
+                         f"(in {folder})") from None
+
+
 def check_output_dir(path: str | os.PathLike, key: str = "output") -> Path:
     """Check, before any work, that ``path`` can become an output folder; returns its nearest existing ancestor.
 
+    The check does what the write will do: it creates the missing folders up to ``path``, a file in the
+    ancestor that will hold the temporary folder and one in ``path``, and removes all it created.
     :class:`InputError` ``("<command line>", key, reason)`` when ``path`` (or an ancestor) exists and is not
-    a folder, or when the folder that would hold the new files is not writable.
+    a folder, or when any of that fails (read-only or virtual file system, permissions).
     """
     final = Path(path)
     if final.exists() and not final.is_dir():
@@ -104,22 +118,36 @@ def check_output_dir(path: str | os.PathLike, key: str = "output") -> Path:
         anchor = anchor.parent
     if not anchor.is_dir():
         raise InputError("<command line>", key, f"{anchor} is a file, not a folder: cannot create {final}")
-    for folder in {anchor, final} if final.is_dir() else {anchor}:
-        if not os.access(folder, os.W_OK | os.X_OK):
-            raise InputError("<command line>", key, f"{folder} is not writable")
+    created = []
+    try:
+        for folder in reversed([final.absolute(), *final.absolute().parents]):
+            if not folder.exists():
+                try:
+                    folder.mkdir()
+                except OSError as exc:
+                    raise InputError("<command line>", key, f"cannot create {final}: {exc.strerror or exc} "
+                                     f"(at {folder})") from None
+                created.append(folder)
+        _probe(anchor, key, final)
+        _probe(final, key, final)
+    finally:
+        for folder in reversed(created):
+            folder.rmdir()
     return anchor
 
 
 def check_output_file(path: str | os.PathLike, key: str = "output") -> None:
-    """Check, before any work, that the file ``path`` can be written: not a folder, its folder exists and is
-    writable; :class:`InputError` ``("<command line>", key, reason)`` otherwise."""
+    """Check, before any work, that the file ``path`` can be written: not a folder, its folder exists and
+    a file can be created there (:func:`_probe`), an existing ``path`` is writable;
+    :class:`InputError` ``("<command line>", key, reason)`` otherwise."""
     target = Path(path)
     if target.is_dir():
         raise InputError("<command line>", key, f"{target} is a folder, not a file")
     folder = target.absolute().parent
     if not folder.is_dir():
         raise InputError("<command line>", key, f"folder {folder} does not exist")
-    if not os.access(folder, os.W_OK | os.X_OK) or (target.exists() and not os.access(target, os.W_OK)):
+    _probe(folder, key, target)
+    if target.exists() and not os.access(target, os.W_OK):
         raise InputError("<command line>", key, f"{target} is not writable")
 
 

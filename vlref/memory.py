@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import Sequence
 
 from .errors import InputError
 
@@ -103,13 +104,28 @@ def available_bytes() -> float | None:
     return min(limits) if limits else None
 
 
-def check_memory(scene, available: float | None = None) -> MemoryEstimate:
+def _set_on_command_line(largest: str, overrides: Sequence[str]) -> str | None:
+    """The ``--set`` item of ``overrides`` that sets what the estimate's ``largest`` part grows with (the image
+    size for ``render.width``, that light's map resolution for ``lights[i].shadows.resolution``), or None."""
+    from .scene.load import parse_override
+
+    causes = ({"render.width", "render.height"} if largest == "render.width"
+              else {largest.replace("[", ".").replace("]", "")})
+    for item in reversed(overrides):  # the last one wins, as when the scene is loaded
+        if ".".join(map(str, parse_override(item)[0])) in causes:
+            return item
+    return None
+
+
+def check_memory(scene, available: float | None = None, overrides: Sequence[str] = ()) -> MemoryEstimate:
     """Raise :class:`InputError` ``(scene file, largest part, "needs about N GB, M GB available")`` when the
-    estimate exceeds the available memory (``available``, default :func:`available_bytes`)."""
+    estimate exceeds the available memory (``available``, default :func:`available_bytes`). When one of the
+    ``--set`` ``overrides`` set that part, the error names it: ``("<command line>", "--set KEY=VALUE", ...)``."""
     est = estimate(scene)
     available = available_bytes() if available is None else available
     if available is not None and est.total > available:
-        raise InputError(scene.source or "<scene>", est.largest,
-                         f"needs about {est.total / GB:.1f} GB, {available / GB:.1f} GB available "
+        item = _set_on_command_line(est.largest, overrides)
+        file, key = ("<command line>", f"--set {item}") if item else (scene.source or "<scene>", est.largest)
+        raise InputError(file, key, f"needs about {est.total / GB:.1f} GB, {available / GB:.1f} GB available "
                          "(--ignore-memory-check renders anyway)")
     return est

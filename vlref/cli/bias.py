@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from pathlib import Path
+
 from .options import add_scene_arguments, load_scene_checked, technique_names
+from .progress_bar import StageBar
 
 HELP = "a technique's error against the reference, and how it falls with steps"
 
@@ -21,11 +24,13 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args) -> int:
     from ..io import output_dir
-    from ..reference.bias import technique_bias
+    from ..reference.bias import DEFAULT_STEPS, technique_bias
 
     scene = load_scene_checked(args)
-    steps = tuple(int(s) for s in args.steps.split(",")) if args.steps else None
-    report = technique_bias(scene, args.technique, steps) if steps else technique_bias(scene, args.technique)
+    steps = tuple(int(s) for s in args.steps.split(",")) if args.steps else DEFAULT_STEPS
+    # the reference's 3 frame stages and its quadrature, then one render per step count
+    with StageBar(False, 4 + len(steps), f"bias {Path(scene.source).stem} {args.technique}") as bar:
+        report = technique_bias(scene, args.technique, steps, progress=bar.stage)
     print(report.summary())
     if args.output:
         with output_dir(args.output) as out:

@@ -13,6 +13,7 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
+import _thread
 import signal
 import sys
 import threading
@@ -59,6 +60,10 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
+REDELIVER_S = 0.01
+"""Delay (s) before a signal that arrived where it cannot raise is delivered again (:func:`_raise_interrupted`)."""
+
+
 class Interrupted(KeyboardInterrupt):
     """Raised in the main thread by SIGINT (Ctrl-C) or SIGTERM while a ``vlref`` command runs."""
 
@@ -67,7 +72,29 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
+def _cannot_raise_here(frame) -> bool:
+    """``frame`` or a caller runs Python code whose caller does not pass an exception on: the callback
+    ``numba.core.serialize._numba_unpickle`` that Numba's compiled code calls to box every array a kernel
+    returns (it ignores the error and returns a result with an exception set: SystemError), or an import
+    (a C extension's initialisation turns any exception into ``ImportError: initialization failed``)."""
+    while frame is not None:
+        name = frame.f_globals.get("__name__")
+        if (frame.f_code.co_name == "_numba_unpickle" and name == "numba.core.serialize") or \
+                name == "importlib._bootstrap":
+            return True
+        frame = frame.f_back
+    return False
+
+
 def _raise_interrupted(signum, frame):
+    # A signal that arrives while a kernel runs is handled at the next Python bytecode: inside the kernel's
+    # return boxing, whose Python callback (_numba_unpickle) Numba calls without checking for an exception.
+    # There, and inside an import, the signal is delivered again a moment later (from another thread:
+    # re-arming it here would run this handler again at once, recursively), until the interpreter is
+    # back in code that passes exceptions on.
+    if _cannot_raise_here(frame):
+        threading.Timer(REDELIVER_S, _thread.interrupt_main, (signum,)).start()
+        return
     # Further signals are ignored from here on, so the clean-up the exception unwinds through (temporary
     # files and folders of vlref.io) runs to its end.
     for sig in (signal.SIGINT, signal.SIGTERM):

@@ -52,7 +52,7 @@ def load_scene_checked(args):
         overrides.append(f'render.technique="{args.technique}"')
     scene = load_scene(args.scene, overrides)
     if not args.ignore_memory_check:
-        check_memory(scene)
+        check_memory(scene, overrides=list(args.set or []))
     return scene
 
 

@@ -220,9 +220,17 @@ def _sha256(path: Path) -> str:
 
 
 def select_entries(entries: list[Entry], only: Sequence[str] | None) -> list[Entry]:
-    """The entries whose name matches one of the ``only`` globs (all of them when ``only`` is empty)."""
+    """The entries whose name matches one of the ``only`` globs (all of them when ``only`` is empty).
+
+    A glob that matches no entry is bad input (:class:`InputError`, named ``<command line>: --only``): a typo
+    must not turn a check into one that passes on nothing."""
     if not only:
         return entries
+    unmatched = [p for p in only if not any(fnmatch.fnmatchcase(e.name, p) for e in entries)]
+    if unmatched:
+        example = entries[0].name if entries else "pillars/physical"
+        raise InputError("<command line>", "--only", f"{', '.join(map(repr, unmatched))} matches no entry of the "
+                         f"suite (names are scene/technique, e.g. {example!r}; `vlref golden list` lists them)")
     return [e for e in entries if any(fnmatch.fnmatchcase(e.name, pattern) for pattern in only)]
 
 

@@ -30,7 +30,10 @@ import numpy as np
 
 from .quadrature import ReferenceResult, render_reference
 
-__all__ = ["BiasReport", "technique_bias", "inscatter_error", "edge_mask", "error_concentration", "loglog_slope"]
+DEFAULT_STEPS = (4, 8, 16, 32, 64)
+"""Step counts of :func:`technique_bias` (and ``vlref bias``) by default."""
+
+__all__ = ["DEFAULT_STEPS", "BiasReport", "technique_bias", "inscatter_error", "edge_mask", "error_concentration", "loglog_slope"]
 
 
 @dataclass
@@ -57,7 +60,8 @@ class BiasReport:
         lines += [f"{r['steps']:>6} {r['mean_abs']:>11.4e} {r['max_abs']:>11.4e} {r['mean_rel']:>11.4e} "
                   f"{r['max_rel']:>11.4e}" for r in self.table]
         lines.append(f"log-log slope of mean_abs vs steps: {self.slope:.3f} (fitted on {self.fit_rows} rows)")
-        lines.append("error concentration: " + ", ".join(f"{k} {v}" for k, v in self.concentration.items()))
+        lines.append("error concentration: " + ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                                                         for k, v in self.concentration.items()))
         return "\n".join(lines)
 
     def to_dict(self) -> dict:
@@ -133,19 +137,23 @@ def inscatter_error(inscatter: np.ndarray, reference: np.ndarray) -> tuple[np.nd
                "max_rel": float(e.max() / r_max.max()) if r_max.max() > 0 else 0.0}
 
 
-def technique_bias(scene, technique: str, steps_list=(4, 8, 16, 32, 64), reference: ReferenceResult | None = None,
-                   rel_tol: float = 1e-4) -> BiasReport:
+def technique_bias(scene, technique: str, steps_list=DEFAULT_STEPS, reference: ReferenceResult | None = None,
+                   rel_tol: float = 1e-4, progress=None) -> BiasReport:
     """Bias of ``technique`` on ``scene`` against the reference (module docstring).
 
     ``reference``: a precomputed :func:`render_reference` of the same scene (computed when None).
+    ``progress``: optional callable receiving stage names: the reference's (when computed here), then
+    ``"<n> steps"`` after each render.
     """
     from ..render import render
 
-    ref = reference if reference is not None else render_reference(scene, rel_tol=rel_tol)
+    ref = reference if reference is not None else render_reference(scene, rel_tol=rel_tol, progress=progress)
     rows, first, depth = [], None, None
     for steps in steps_list:
         s = scene.replace(render=dataclasses.replace(scene.render, technique=technique, steps=int(steps)))
         res = render(s)
+        if progress is not None:
+            progress(f"{steps} steps")
         e, row = inscatter_error(res.buffers["inscatter"], ref.inscatter)
         rows.append({"steps": int(steps), **row})
         if first is None:
