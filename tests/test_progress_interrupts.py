@@ -2,8 +2,10 @@
 
 * The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
   bands change no bit of a result.
-* SIGINT / SIGTERM during ``vlref render``: one line ``vlref: interrupted``, exit 130 / 143, no traceback,
-  no output folder and no temporary file or folder left behind.
+* SIGINT / SIGTERM during every long command (render, render --frames, reference, bias, sweep, golden
+  build / verify, march, bench, warmup), in this process or on a ``--scheduler local:2`` cluster: one line
+  ``vlref: interrupted``, exit 130 / 143, no traceback (nor from a child process), no output folder and no
+  temporary file or folder left behind.
 """
 
 import os
@@ -95,12 +97,13 @@ def test_bands_change_no_bit(monkeypatch, technique):
         assert np.array_equal(runs[0][name], runs[1][name], equal_nan=True), name
 
 
-def _stderr_reader(proc):
-    """Collect the child's stderr (tqdm writes without newlines) in a background thread."""
+def _stderr_reader(proc, stream=None):
+    """Collect the child's stderr (or ``stream``; tqdm writes without newlines) in a background thread."""
     chunks = []
+    stream = proc.stderr if stream is None else stream
 
     def read():
-        for chunk in iter(lambda: os.read(proc.stderr.fileno(), 4096), b""):
+        for chunk in iter(lambda: os.read(stream.fileno(), 4096), b""):
             chunks.append(chunk)
 
     thread = threading.Thread(target=read, daemon=True)
@@ -108,30 +111,96 @@ def _stderr_reader(proc):
     return chunks, thread
 
 
-@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
-def test_signal_mid_render_exits_cleanly(tmp_path, sig, code):
-    work = tmp_path / "work"
-    work.mkdir()
-    # A render of several seconds; the bar appears once it has run for about a second: then signal it.
-    proc = subprocess.Popen([sys.executable, "-m", "vlref", "render", "pillars", "-o", str(work / "out"),
-                             "--set", "render.steps=2048"], cwd=work, env=ENV, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE)
-    chunks, reader = _stderr_reader(proc)
+def _interrupt(work: Path, argv: list[str], marker: bytes, sig: int, group: bool = False) -> None:
+    """Run ``vlref ARGV`` in ``work`` (empty), send ``sig`` once ``marker`` shows on its stdout or stderr (its
+    long phase), and check the outcome: exit 128 + sig, the last line ``vlref: interrupted``, no traceback
+    (nor from a child process), and ``work`` still empty (no output, no temporary file or folder).
+    ``group``: to the whole process group, as Ctrl-C in a terminal does (children get it too)."""
+    proc = subprocess.Popen([sys.executable, "-m", "vlref", *argv], cwd=work, env=dict(ENV, PYTHONUNBUFFERED="1"),
+                            stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, start_new_session=True)
+    chunks, reader = _stderr_reader(proc, proc.stdout)
     deadline = time.monotonic() + 300  # a cold Numba cache compiles first
-    while b"render pillars" not in b"".join(chunks) and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert proc.poll() is None, "the render ended before it could be interrupted"
-    proc.send_signal(sig)
+    while marker not in b"".join(chunks) and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert proc.poll() is None, "the command ended before it could be interrupted: " + b"".join(chunks).decode()
+    if group:
+        os.killpg(proc.pid, sig)
+    else:
+        proc.send_signal(sig)
     try:
         rc = proc.wait(timeout=120)
     finally:
-        proc.kill()
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
     reader.join(timeout=10)
-    err = b"".join(chunks).decode(errors="replace")
-    assert rc == code
-    assert "Traceback" not in err and "KeyboardInterrupt" not in err
-    assert err.replace("\r", "\n").rstrip().splitlines()[-1].strip() == "vlref: interrupted"
+    out = b"".join(chunks).decode(errors="replace")
+    assert rc == 128 + sig, out
+    assert "Traceback" not in out and "KeyboardInterrupt" not in out and "Error" not in out, out
+    assert out.replace("\r", "\n").rstrip().splitlines()[-1].strip() == "vlref: interrupted", out
     assert sorted(p.name for p in work.iterdir()) == []  # no output folder, no .out.*.partial, no temp file
+
+
+def _work(tmp_path: Path) -> Path:
+    work = tmp_path / "work"
+    work.mkdir()
+    return work
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_mid_render_exits_cleanly(tmp_path, sig):
+    # A render of several seconds; the bar appears once it has run for about a second: then signal it.
+    _interrupt(_work(tmp_path), ["render", "pillars", "-o", "out", "--set", "render.steps=2048"],
+               b"render pillars", sig)
+
+
+QUADRATURE = ["--set", "render.width=160", "--set", "render.height=90"]  # a quadrature of several seconds
+SWEEP = """scene = "pillars"
+set = ["render.width=160", "render.height=90"]
+techniques = ["physical", "killzone"]
+[grid]
+"render.steps" = [8, 16, 32]
+"""
+
+
+@pytest.mark.parametrize("argv, marker, sig", [
+    # the crash of issue 27: the signal arrived inside the boxing of the kernel's returned arrays
+    (["reference", "pillars", *QUADRATURE, "-o", "out"], b"stage 4/4", signal.SIGINT),
+    (["bias", "pillars", "--technique", "killzone", "--steps", "4,8", *QUADRATURE, "-o", "out"], b"bias pillars",
+     signal.SIGTERM),
+    (["sweep", "{inputs}/sweep.toml", "-o", "out"], b"sweep", signal.SIGINT),
+    (["render", "anim_spot", "--frames", "0:8", "--set", "render.steps=512", "-o", "out"], b"frames", signal.SIGTERM),
+    (["golden", "build", "--dir", "golden"], b"built ", signal.SIGINT),
+    (["golden", "verify"], b"ok ", signal.SIGTERM),
+    (["march", "{inputs}/port/port.toml", "--set", "render.steps=4096", "-o", "out"], b"march port", signal.SIGINT),
+    (["bench", "--quick"], b"[bench]", signal.SIGTERM),
+    (["warmup", "--jobs", "2"], b"group, frame]", signal.SIGINT),  # its pool is up: the first group is done
+], ids=["reference", "bias", "sweep", "frames", "golden-build", "golden-verify", "march", "bench", "warmup"])
+def test_every_long_command_exits_cleanly_on_a_signal(tmp_path, argv, marker, sig):
+    """Ctrl-C goes to the whole process group (warmup's pool, the march compiler get it too); SIGTERM to vlref."""
+    inputs = tmp_path / "inputs"
+    inputs.mkdir()
+    if "{inputs}/sweep.toml" in argv:
+        (inputs / "sweep.toml").write_text(SWEEP)
+    if "{inputs}/port/port.toml" in argv:
+        from vlref.port import export_port
+        export_port("pillars", inputs / "port", ("render.width=160", "render.height=90"))
+    _interrupt(_work(tmp_path), [a.replace("{inputs}", str(inputs)) for a in argv], marker, sig,
+               group=sig == signal.SIGINT)
+
+
+@pytest.mark.parametrize("argv, sig", [
+    (["sweep", "{inputs}/sweep.toml", "-o", "out"], signal.SIGINT),
+    (["reference", "pillars", *QUADRATURE, "-o", "out"], signal.SIGTERM),
+], ids=["sweep", "reference"])
+def test_a_signal_under_a_local_dask_cluster_exits_cleanly(tmp_path, argv, sig):
+    """``--scheduler local:2``: Ctrl-C reaches the worker processes too; they ignore it, and vlref closes the
+    cluster: one line, no worker traceback."""
+    inputs = tmp_path / "inputs"
+    inputs.mkdir()
+    (inputs / "sweep.toml").write_text(SWEEP)
+    _interrupt(_work(tmp_path), [a.replace("{inputs}", str(inputs)) for a in argv] + ["--scheduler", "local:2"],
+               b"item/s", sig, group=sig == signal.SIGINT)
 
 
 def test_warmup_covers_every_technique_and_precision():

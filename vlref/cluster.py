@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 from .errors import InputError
+from .processes import ignoring_sigint
 
 __all__ = ["Item", "After", "ItemsFailed", "parse_scheduler", "run_items",
            "local_cluster", "host_cores"]
@@ -129,7 +130,10 @@ def local_cluster(n_workers: int, quiet: bool = True):
     """A ``distributed.LocalCluster`` of ``n_workers`` processes with one Dask thread each.
 
     Each worker gets ``NUMBA_NUM_THREADS = max(1, cores // n_workers)``, the parent's ``NUMBA_CACHE_DIR``
-    and this vlref on ``PYTHONPATH``; the scheduler reruns an item lost with its worker once.
+    and this vlref on ``PYTHONPATH``; the scheduler reruns an item lost with its worker once. ``quiet``: the
+    cluster logs only critical messages (its errors while it shuts down, such as heartbeats to a scheduler
+    already closed after an interrupt, are noise; an item's failure reaches the caller as :class:`ItemsFailed`),
+    else warnings too.
     """
     import logging
 
@@ -141,9 +145,10 @@ def local_cluster(n_workers: int, quiet: bool = True):
            "PYTHONPATH": os.pathsep.join([root] + [p for p in [os.environ.get("PYTHONPATH")] if p])}
     if os.environ.get("NUMBA_CACHE_DIR"):
         env["NUMBA_CACHE_DIR"] = os.environ["NUMBA_CACHE_DIR"]
-    with dask.config.set({"distributed.scheduler.allowed-failures": 1}):
+    # the workers ignore Ctrl-C (sent to the whole process group): this process closes the cluster (vlref.processes)
+    with dask.config.set({"distributed.scheduler.allowed-failures": 1}), ignoring_sigint():
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, env=env,
-                            dashboard_address=":0", silence_logs=logging.ERROR if quiet else logging.WARNING)
+                            dashboard_address=":0", silence_logs=logging.CRITICAL if quiet else logging.WARNING)
 
 
 @contextlib.contextmanager
@@ -250,22 +255,19 @@ def _run_on(client, items: Sequence[Item], on_result, desc: str, quiet: bool) ->
     needed = {a.key for item in items for a in item.args if isinstance(a, After)}
     failures: list[tuple[str, str]] = []
     bad_input = True
-    bar = None if quiet else tqdm(total=len(items), desc=desc, unit="item", file=sys.stderr)
-    for future in as_completed(list(futures.values())):
-        key = key_of[future.key]
-        if future.status == "error":
-            exc = future.exception()
-            bad_input = bad_input and isinstance(exc, InputError)
-            failures.append((key, f"{type(exc).__name__}: {exc}"))
-        else:
-            seconds, result = future.result()
-            on_result(key, result, seconds)
-        if key not in needed:
-            del futures[key]
-        if bar is not None:
+    with tqdm(total=len(items), desc=desc, unit="item", file=sys.stderr, leave=False, disable=quiet) as bar:
+        for future in as_completed(list(futures.values())):
+            key = key_of[future.key]
+            if future.status == "error":
+                exc = future.exception()
+                bad_input = bad_input and isinstance(exc, InputError)
+                failures.append((key, f"{type(exc).__name__}: {exc}"))
+            else:
+                seconds, result = future.result()
+                on_result(key, result, seconds)
+            if key not in needed:
+                del futures[key]
             bar.update(1)
-    if bar is not None:
-        bar.close()
     if failures:
         order = {k: i for i, k in enumerate(item.key for item in items)}
         raise ItemsFailed(sorted(failures, key=lambda f: order[f[0]]), bad_input)

@@ -34,11 +34,12 @@ import contextlib
 import dataclasses
 import multiprocessing
 import os
-import signal
 import time
 from typing import Callable, Iterator
 
 import numpy as np
+
+from .processes import ignoring_sigint
 
 __all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "march_cached"]
 
@@ -91,20 +92,10 @@ def run_task(name: str) -> tuple[str, float]:
     return name, time.perf_counter() - start
 
 
-@contextlib.contextmanager
-def _spawn_ignoring_sigint() -> Iterator[multiprocessing.context.SpawnContext]:
-    """A spawn context whose processes, started inside the block, ignore SIGINT from their first instruction
-    (an ignored signal stays ignored across exec, and Python then installs no KeyboardInterrupt handler):
-    Ctrl-C reaches the whole process group, and the parent alone handles it (it terminates them)."""
-    try:
-        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    except ValueError:  # not the main thread: signals are the main thread's business
-        previous = None
-    try:
-        yield multiprocessing.get_context("spawn")
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGINT, previous)
+def _spawn():
+    """The spawn context (a fresh interpreter per process: no forked Numba thread pool; compiled code is
+    shared via the cache)."""
+    return multiprocessing.get_context("spawn")
 
 
 def warmup(jobs: int | None = None, progress=None) -> dict[str, float]:
@@ -114,9 +105,8 @@ def warmup(jobs: int | None = None, progress=None) -> dict[str, float]:
         jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
     progress = progress or (lambda name: None)
     times = {}
-    # spawn: a fresh interpreter per worker (no forked Numba thread pool), compiled code shared via the cache
-    with _spawn_ignoring_sigint() as ctx:
-        pool = ctx.Pool(max(1, min(jobs, len(TASKS) - 1)))
+    with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
+        pool = _spawn().Pool(max(1, min(jobs, len(TASKS) - 1)))
     with pool:  # terminated on exit, also on an interrupt
         for name, seconds in pool.imap_unordered(run_task, ["frame"]):
             times[name] = seconds
@@ -200,8 +190,8 @@ def march_ahead(scene) -> Iterator[Callable[[], None]]:
     if scene.render.technique != "physical" or cores < 2 or march_cached(scene):
         yield lambda: None
         return
-    with _spawn_ignoring_sigint() as ctx:
-        proc = ctx.Process(target=compile_march, args=(scene,), daemon=True)
+    with ignoring_sigint():
+        proc = _spawn().Process(target=compile_march, args=(scene,), daemon=True)
         proc.start()
     try:
         yield proc.join

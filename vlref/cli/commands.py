@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import importlib
-import _thread
 import signal
 import sys
 import threading
@@ -60,10 +59,6 @@ def build_parser() -> argparse.ArgumentParser:
     return p
 
 
-REDELIVER_S = 0.01
-"""Delay (s) before a signal that arrived where it cannot raise is delivered again (:func:`_raise_interrupted`)."""
-
-
 class Interrupted(KeyboardInterrupt):
     """Raised in the main thread by SIGINT (Ctrl-C) or SIGTERM while a ``vlref`` command runs."""
 
@@ -72,28 +67,45 @@ class Interrupted(KeyboardInterrupt):
         self.signum = signum
 
 
-def _cannot_raise_here(frame) -> bool:
-    """``frame`` or a caller runs Python code whose caller does not pass an exception on: the callback
-    ``numba.core.serialize._numba_unpickle`` that Numba's compiled code calls to box every array a kernel
-    returns (it ignores the error and returns a result with an exception set: SystemError), or an import
-    (a C extension's initialisation turns any exception into ``ImportError: initialization failed``)."""
-    while frame is not None:
-        name = frame.f_globals.get("__name__")
-        if (frame.f_code.co_name == "_numba_unpickle" and name == "numba.core.serialize") or \
+def _callback_caller(frame):
+    """The frame to raise in when a signal arrives in ``frame``: ``frame`` itself, unless ``frame`` or a
+    caller runs Python code whose own caller does not pass an exception on; then the frame that called
+    that code (the outermost such). Such code: ``numba.core.serialize._numba_unpickle``, which Numba's
+    compiled code calls to box every array a kernel returns (it ignores the error and returns a result with
+    an exception set: SystemError), and imports (a C extension's initialisation turns any exception into
+    ``ImportError: initialization failed``)."""
+    caller, current = frame, frame
+    while current is not None:
+        name = current.f_globals.get("__name__")
+        if (current.f_code.co_name == "_numba_unpickle" and name == "numba.core.serialize") or \
                 name == "importlib._bootstrap":
-            return True
-        frame = frame.f_back
-    return False
+            caller = current.f_back
+        current = current.f_back
+    return caller
+
+
+def _raise_when_back_in(frame, signum: int) -> None:
+    """Raise :class:`Interrupted` at ``frame``'s next bytecode: a trace function on that frame alone (new
+    frames are not traced), removed when it fires; the thread's previous trace function is restored."""
+    previous = sys.gettrace()
+
+    def fire(f, event, arg):
+        f.f_trace = None
+        sys.settrace(previous)
+        _raise_interrupted(signum, f)
+
+    frame.f_trace_opcodes = True
+    frame.f_trace = fire
+    sys.settrace(lambda f, event, arg: None)
 
 
 def _raise_interrupted(signum, frame):
     # A signal that arrives while a kernel runs is handled at the next Python bytecode: inside the kernel's
     # return boxing, whose Python callback (_numba_unpickle) Numba calls without checking for an exception.
-    # There, and inside an import, the signal is delivered again a moment later (from another thread:
-    # re-arming it here would run this handler again at once, recursively), until the interpreter is
-    # back in code that passes exceptions on.
-    if _cannot_raise_here(frame):
-        threading.Timer(REDELIVER_S, _thread.interrupt_main, (signum,)).start()
+    # There, and inside an import, it is raised when the interpreter is back in the frame that made the call.
+    caller = _callback_caller(frame)
+    if caller is not frame and caller is not None:
+        _raise_when_back_in(caller, signum)
         return
     # Further signals are ignored from here on, so the clean-up the exception unwinds through (temporary
     # files and folders of vlref.io) runs to its end.
@@ -123,7 +135,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             return _run(list(sys.argv[1:] if argv is None else argv))
         except KeyboardInterrupt as exc:
-            print("vlref: interrupted", file=sys.stderr)
+            # on a line of its own: a progress bar cut short may have left the cursor after its text
+            print("\r\x1b[K" if sys.stderr.isatty() else "\r", end="vlref: interrupted\n", file=sys.stderr)
             return 128 + int(getattr(exc, "signum", signal.SIGINT))
 
 

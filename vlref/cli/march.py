@@ -6,6 +6,9 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
+
+from .progress_bar import StageBar
 
 HELP = "march and post passes on a port's own buffers"
 
@@ -29,7 +32,9 @@ def run(args) -> int:
     start = time.perf_counter()
     check_output_dir(args.output)
     port = load_port(args.manifest, args.set or ())
-    save_march(args.output, port, march(port), args.stages)
+    with StageBar(args.quiet, 1, f"march {Path(args.manifest).stem}"):  # the march's rows
+        result = march(port)
+    save_march(args.output, port, result, args.stages)
     if not args.quiet:
         print(f"wrote {args.output} ({port.scene.render.technique}, {time.perf_counter() - start:.2f} s)",
               file=sys.stderr)

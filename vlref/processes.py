@@ -1,0 +1,39 @@
+"""Child processes that leave Ctrl-C to their parent.
+
+Ctrl-C sends SIGINT to the terminal's whole foreground process group: the ``vlref`` command and every
+process it started (``vlref warmup``'s pool, ``vlref render``'s march compiler, the workers of a
+``--scheduler local`` Dask cluster). Each child would raise its own ``KeyboardInterrupt`` and print its
+traceback. Children started inside :func:`ignoring_sigint` ignore SIGINT from their first instruction (an
+ignored signal stays ignored across ``fork`` and ``exec``, and Python then installs no KeyboardInterrupt
+handler, nor does asyncio); the parent alone handles it, and stops them (terminates its pool, closes its
+cluster).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import signal
+import threading
+from typing import Iterator
+
+__all__ = ["ignoring_sigint"]
+
+
+@contextlib.contextmanager
+def ignoring_sigint() -> Iterator[None]:
+    """SIGINT ignored inside the block, so that processes started there ignore it; the handler is restored
+    after. A SIGINT that comes meanwhile is blocked in the calling (main) thread and in the threads it starts
+    meanwhile (Linux holds a blocked signal pending even when ignored), and reaches this process's handler
+    when the block ends; only one that the kernel hands to an older thread, which does not block it (tqdm's
+    monitor), is lost. The children inherit the block too. Outside the main thread (where signals cannot
+    be set) a no-op."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
