@@ -169,7 +169,7 @@ techniques = ["physical", "killzone"]
     (["bias", "pillars", "--technique", "killzone", "--steps", "4,8", *QUADRATURE, "-o", "out"], b"bias pillars",
      signal.SIGTERM),
     (["sweep", "{inputs}/sweep.toml", "-o", "out"], b"sweep", signal.SIGINT),
-    (["render", "anim_spot", "--frames", "0:8", "--set", "render.steps=512", "-o", "out"], b"frames", signal.SIGTERM),
+    (["render", "anim_spot", "--frames", "0:8", "--set", "render.steps=512", "-o", "out"], b"render anim_spot", signal.SIGTERM),
     (["golden", "build", "--dir", "golden"], b"built ", signal.SIGINT),
     (["golden", "verify"], b"ok ", signal.SIGTERM),
     (["march", "{inputs}/port/port.toml", "--set", "render.steps=4096", "-o", "out"], b"march port", signal.SIGINT),

@@ -37,7 +37,7 @@ from . import __version__
 from .camera import Camera, camera_from_settings
 from .scene.animation import scene_at
 from .scene.model import Scene
-from .techniques import FRAME_BUFFERS, TECHNIQUES
+from .techniques import APPLIES, FRAME_BUFFERS, TECHNIQUES, suitable_scenes
 
 __all__ = ["Frame", "RenderResult", "render", "prepare_frame", "scene_hash", "scene_settings_json"]
 
@@ -174,4 +174,7 @@ def render(scene: Scene, stages: bool = False, progress: Callable[[str], None] |
                 "technique": scene.render.technique, "settings": scene_settings_json(scene),
                 "scene_file": scene.source}
     notes = technique.notes(scene, out) if technique.notes is not None else []
+    if not technique.applies(scene):
+        notes.insert(0, f"{scene.render.technique} does not suit this scene ({APPLIES[scene.render.technique]}); "
+                        f"bundled scenes that suit it: {', '.join(suitable_scenes(scene.render.technique))}")
     return RenderResult(buffers, metadata, timings, notes, next_history)

@@ -64,7 +64,11 @@ def _render_frames(args, scene) -> int:
     from ..sequence import parse_frames, write_sequence
 
     frames = parse_frames(args.frames, scene)
-    with StageBar(args.quiet, len(frames), f"render {Path(scene.source).stem} frames") as bar, \
+    if scene.animation is None and not args.quiet:
+        print(f"vlref: note: {Path(scene.source).name} has no [animation]: every frame shows the same scene "
+              "(only render.frame's temporal jitter and froxel's history change); `vlref scenes` marks the "
+              "animated ones", file=sys.stderr)
+    with StageBar(args.quiet, len(frames), f"render {Path(scene.source).stem}", "frame") as bar, \
             output_dir(args.output) as out:
         write_sequence(out, scene, frames, args.stages, MAIN_BUFFERS, on_frame=lambda f: bar.stage())
     if not args.quiet:

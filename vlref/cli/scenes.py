@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-HELP = "list the bundled scenes"
+HELP = "list the bundled scenes and the techniques that apply to each"
 
 
 def parser() -> argparse.ArgumentParser:
@@ -13,6 +13,11 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args) -> int:
     from ..scene import bundled_scenes, load_scene
+    from ..techniques import TECHNIQUES
+
     for name, path in bundled_scenes().items():
-        print(f"{name:16s} {load_scene(path).description}")
+        scene = load_scene(path)
+        applies = [t.name for t in TECHNIQUES.values() if t.applies(scene)]
+        animated = " [animation: --frames]" if scene.animation is not None else ""
+        print(f"{name:16s} {scene.description}{animated}\n{'':16s} techniques: {', '.join(applies)}")
     return 0

@@ -36,7 +36,8 @@ import numpy as np
 from ..scene.technique_params import (FroxelParams, KillzoneParams, PhysicalParams, RadialParams, SlightlyMadParams,
                                       UrpParams)
 
-__all__ = ["Technique", "TECHNIQUES", "Buffers", "FRAME_BUFFERS", "RESOLVED_DEFAULTS", "resolved", "every_scene"]
+__all__ = ["Technique", "TECHNIQUES", "Buffers", "FRAME_BUFFERS", "RESOLVED_DEFAULTS", "resolved", "every_scene",
+           "APPLIES", "suitable_scenes"]
 
 Buffers = dict[str, np.ndarray]
 """What a technique's ``render(scene, frame)`` returns (module docstring)."""
@@ -93,3 +94,16 @@ TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     Technique("froxel", froxel.render, FroxelParams, every_scene, 360),
 )}
 """Every technique by name, in the order the golden suite and the listings use."""
+
+APPLIES = {"physical": "every scene", "killzone": "every scene", "slightlymad": "every scene",
+           "urp": "scenes with a directional light (its main light)",
+           "radial": "scenes whose radial light projects inside the frame", "froxel": "every scene"}
+"""Each technique's ``applies`` rule in words (help texts, README, ``vlref scenes``)."""
+
+
+def suitable_scenes(technique: str) -> list[str]:
+    """The bundled scenes that ``technique``'s ``applies`` rule accepts, by name."""
+    from ..scene import bundled_scenes, load_scene
+
+    rule = TECHNIQUES[technique].applies
+    return [name for name, path in bundled_scenes().items() if rule(load_scene(path))]

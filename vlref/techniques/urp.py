@@ -37,8 +37,11 @@ def main_light(scene) -> int:
     for i, light in enumerate(scene.lights):
         if light.type == "directional":
             return i
+    from . import suitable_scenes  # the registry imports this module: imported when needed
+
     raise InputError(scene.source or "<scene>", "render.technique",
-                     "\"urp\" needs a directional light (the URP main light); the scene has none")
+                     "\"urp\" needs a directional light (the URP main light); the scene has none (bundled scenes "
+                     f"with one: {', '.join(suitable_scenes('urp'))})")
 
 
 def has_main_light(scene) -> bool:
