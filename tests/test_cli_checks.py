@@ -4,6 +4,7 @@ early output checks, --set errors, the installed golden suite, HDR-FLIP's absenc
 import argparse
 import configparser
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -197,3 +198,104 @@ def test_help_of_each_command_runs():
     for args in (["render", "--help"], ["golden", "--help"], ["march", "export", "--help"]):
         r = vlref(*args)
         assert r.returncode == 0 and "default" in r.stdout, args
+
+
+# ---------------------------------------------------------------- 8: issue 27, what a new user trips over
+
+def test_golden_only_that_matches_nothing_is_bad_input(tmp_path, capsys):
+    """A typo in --only must not turn the golden check into one that passes on nothing."""
+    from vlref.cli import main
+
+    for action, where in (("verify", []), ("build", ["--dir", str(tmp_path / "g")]), ("list", [])):
+        assert main(["golden", action, "--only", "pillar/*", *where]) == 2, action
+        err = capsys.readouterr().err
+        assert "<command line>: --only: 'pillar/*' matches no entry" in err and "vlref golden list" in err, err
+    assert main(["golden", "list", "--only", "pillars/*", "--only", "nope"]) == 2  # one glob of several
+    assert "'nope' matches no entry" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []  # build wrote nothing
+
+
+def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
+    from vlref.cli import main
+    from vlref.scene import bundled_scenes, load_scene
+
+    assert main(["scenes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    for name, path in bundled_scenes().items():
+        scene = load_scene(path)
+        row = lines[lines.index(next(l for l in lines if l.split()[0] == name)) + 1]
+        listed = row.split("techniques: ")[1].split(", ")
+        assert ("urp" in listed) == any(light.type == "directional" for light in scene.lights), name
+        assert {"physical", "killzone", "slightlymad", "froxel"} <= set(listed), name
+    assert sum("[animation: --frames]" in l for l in lines) == 3
+
+
+def test_a_technique_that_needs_another_scene_names_the_bundled_scenes_that_suit_it(tmp_path, capsys):
+    from vlref.cli import main
+
+    assert main(["render", "--technique", "urp", "-o", str(tmp_path / "o"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert 'needs a directional light' in err and "bundled scenes with one: " in err and "urp_sun" in err
+    assert not (tmp_path / "o").exists()
+    # radial renders any scene, but behind_camera's light projects behind the camera: a note says so
+    assert main(["render", "behind_camera", "--technique", "radial", "-o", str(tmp_path / "r"),
+                 "--set", "render.width=32", "--set", "render.height=18"]) == 0
+    err = capsys.readouterr().err
+    assert "vlref: note: radial does not suit this scene (scenes whose radial light projects inside the frame); " \
+           "bundled scenes that suit it: " in err and "radial_sun" in err
+
+
+def test_frames_of_a_scene_without_animation_are_noted_and_counted_as_frames(tmp_path, capsys):
+    from vlref.cli import main
+
+    assert main(["render", "pillars", "--frames", "0:2", "-o", str(tmp_path / "f"), "--set", "render.width=16",
+                 "--set", "render.height=9"]) == 0
+    err = capsys.readouterr().err
+    assert "vlref: note: pillars.toml has no [animation]: every frame shows the same scene" in err
+    assert main(["render", "anim_spot", "--frames", "0:1", "-o", str(tmp_path / "a"), "--set", "render.width=16",
+                 "--set", "render.height=9"]) == 0
+    assert "has no [animation]" not in capsys.readouterr().err
+
+
+def test_a_compiling_kernel_is_announced_once(capsys):
+    """The bar stands still while Numba compiles: the first compilation says so, once; a cached or
+    already compiled kernel says nothing."""
+    import numba
+
+    from vlref.cli.progress_bar import StageBar
+
+    @numba.njit
+    def fresh(x):  # not cached: compiles on its first call
+        return x + 1
+
+    with StageBar(False, 1, "test"):
+        fresh(1)
+        fresh(2.0)  # a second compilation (float): no second line
+    with StageBar(False, 1, "test"):
+        fresh(3)
+    err = capsys.readouterr().err
+    assert err.count("vlref: compiling kernels (first run, cached afterwards") == 1
+
+
+def test_a_sweep_item_that_fails_names_the_item(tmp_path, capsys):
+    from vlref.cli import main
+
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('scene = "pillars"\nset = ["render.width=16", "render.height=9"]\ntechniques = ["urp"]\n'
+                    'rel_tol = 1e-2\npoints = [["render.steps=4"]]\n')
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "out"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "1 item(s) failed:\n  urp/000: InputError: " in err and "needs a directional light" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_bias_prints_its_figures_to_a_few_digits():
+    from vlref.reference.bias import BiasReport
+
+    table = [{"steps": 4, "mean_abs": 1 / 3, "max_abs": 2 / 3, "mean_rel": 1 / 7, "max_rel": 1 / 9}]
+    report = BiasReport("killzone", np.zeros((2, 2)), 1 / 7, 1 / 9,
+                        {"depth_edges": 0.123456789012, "top_fraction": 0.01, "top_bbox": (0, 1, 2, 3)}, table,
+                        -1.0123456789, 1, 1e-9)
+    text = report.summary()
+    assert "depth_edges 0.123," in text and "top_bbox (0, 1, 2, 3)" in text
+    assert not re.search(r"\d{6}", text), text  # no float printed to more than 5 digits
