@@ -299,3 +299,46 @@ def test_bias_prints_its_figures_to_a_few_digits():
     text = report.summary()
     assert "depth_edges 0.123," in text and "top_bbox (0, 1, 2, 3)" in text
     assert not re.search(r"\d{6}", text), text  # no float printed to more than 5 digits
+
+
+def test_technique_all_renders_every_applicable_technique_at_one_exposure_with_its_level(tmp_path, capsys):
+    from vlref.cli import main
+    from vlref.io import luminance, png_text, read_image, srgb8
+    from vlref.sheet import LABEL_HEIGHT
+
+    out = tmp_path / "all"
+    assert main(["render", "urp_sun", "--technique", "all", "-o", str(out), "--set", "render.width=32",
+                 "--set", "render.height=18"]) == 0
+    err = capsys.readouterr().err
+    names = ["physical", "killzone", "slightlymad", "urp", "radial", "froxel"]  # every one applies to urp_sun
+    assert sorted(p.name for p in out.iterdir()) == sorted(names + ["sheet.png"])
+    exposures = {float(png_text((out / n / "final.png").read_bytes())["vlref_exposure"]) for n in names}
+    assert len(exposures) == 1  # one exposure for every technique
+    exposure = exposures.pop()
+    sheet = read_image(out / "sheet.png")
+    assert sheet.shape[:2] == (2 * (18 + LABEL_HEIGHT) + 2, 3 * 32 + 2 * 2)
+    physical = luminance(read_image(out / "physical" / "inscatter.exr")).mean()
+    line = next(l for l in err.splitlines() if l.startswith("level against physical"))
+    for i, name in enumerate(names):
+        r, c = divmod(i, 3)
+        panel = sheet[r * (18 + LABEL_HEIGHT + 2) + LABEL_HEIGHT:r * (18 + LABEL_HEIGHT + 2) + LABEL_HEIGHT + 18,
+                      c * 34:c * 34 + 32]
+        expected = srgb8(read_image(out / name / "final.exr"), exposure) / 255.0
+        assert np.abs(panel - expected).max() <= 0.5 / 255, name  # the panel is the final at the shared exposure
+        level = luminance(read_image(out / name / "inscatter.exr")).mean() / physical
+        assert f"{name} {level:.3g}x" in line, (name, level, line)
+    assert "physical 1x" in line
+
+
+def test_compare_refuses_an_8bit_preview_unless_asked(tmp_path, capsys):
+    from vlref.cli import main
+    from vlref.io import write_exr, write_png
+
+    img = np.full((4, 6, 3), 0.25, np.float32)
+    write_exr(tmp_path / "ref.exr", img)
+    write_png(tmp_path / "test.png", img)
+    assert main(["compare", str(tmp_path / "ref.exr"), str(tmp_path / "test.png")]) == 2
+    err = capsys.readouterr().err
+    assert "<command line>: test: " in err and "is an 8-bit image" in err and "--allow-8bit" in err
+    assert main(["compare", str(tmp_path / "test.png"), str(tmp_path / "test.png"), "--allow-8bit", "-q",
+                 "--no-flip"]) == 0

@@ -38,7 +38,21 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--no-flip", action="store_true", help="skip HDR-FLIP (default: computed when flip-evaluator "
                    "is installed)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing, use the exit code (default: off)")
+    p.add_argument("--allow-8bit", action="store_true", help="accept 8-bit PNG/JPEG inputs, compared as their "
+                   "0-1 values (default: refused; a .png of vlref is a tone-mapped preview, not radiance)")
     return p
+
+
+EIGHT_BIT = (".png", ".jpg", ".jpeg")
+"""Image files that hold 8-bit values: tone-mapped previews, refused as inputs without ``--allow-8bit``."""
+
+
+def _refuse_8bit(args) -> None:
+    for key, path in (("ref", args.ref), ("test", args.test)):
+        if Path(path).suffix.lower() in EIGHT_BIT and not args.allow_8bit:
+            raise InputError(CLI, key, f"{path} is an 8-bit image: vlref's final.png is a preview (auto-exposed, "
+                             "sRGB-encoded, clipped to 255), not the linear radiance the tolerances are set for; "
+                             "compare the .exr (final.exr), or pass --allow-8bit to compare 8-bit images as they are")
 
 
 def _parse_set(items: Sequence[str] | None) -> dict[str, str]:
@@ -59,6 +73,7 @@ def run(args) -> int:
 
     if args.output:
         check_output_dir(args.output)
+    _refuse_8bit(args)
     if args.border < 0:
         raise InputError(CLI, "--border", f"must be an integer >= 0, got {args.border}")
     report = compare_files(args.ref, args.test, args.preset, _parse_set(args.set),

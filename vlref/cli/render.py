@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from pathlib import Path
 
+from ..errors import InputError
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names
 from .progress_bar import StageBar
 
@@ -19,8 +21,10 @@ def parser() -> argparse.ArgumentParser:
     add_scene_arguments(p)
     p.add_argument("-o", "--output", default="out", help="output folder (default: out)")
     p.add_argument("--technique", metavar="NAME",
-                   help=f"technique ({technique_names()}); shortcut for --set render.technique=NAME "
-                        "(default: the scene's render.technique, physical when unset)")
+                   help=f"technique ({technique_names()}); shortcut for --set render.technique=NAME; 'all': "
+                        "every technique that applies to the scene, one exposure for all, DIR/<technique>/ and "
+                        "a labelled side-by-side DIR/sheet.png (default: the scene's render.technique, physical "
+                        "when unset)")
     p.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map (default: off)")
     p.add_argument("--frames", metavar="A:B", help="render frames A..B-1 of the scene's [animation] as numbered "
                    "EXR sequences (<buffer>.NNNN.exr) plus preview.gif (and preview.mp4 with vlref[video]) "
@@ -34,7 +38,14 @@ def run(args) -> int:
     from ..render import render
     from ..warmup import march_ahead
 
+    every = args.technique == "all"
+    if every:
+        if args.frames is not None:
+            raise InputError("<command line>", "--technique all", "renders one frame of each technique: drop --frames")
+        args.technique = None
     scene = load_scene_checked(args)
+    if every:
+        return _render_all(args, scene)
     if args.frames is not None:
         return _render_frames(args, scene)
     # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
@@ -74,4 +85,41 @@ def _render_frames(args, scene) -> int:
     if not args.quiet:
         print(f"wrote {args.output} (frames {frames.start}..{frames.stop - 1}, {scene.render.technique})",
               file=sys.stderr)
+    return 0
+
+
+def _render_all(args, scene) -> int:
+    """``vlref render SCENE --technique all``: every technique that applies, one exposure (:mod:`vlref.sheet`)."""
+    from ..io import output_dir, png_bytes, save_render, srgb8, write_bytes
+    from ..render import render
+    from ..sheet import contact_sheet, inscatter_level, labelled
+    from ..techniques import TECHNIQUES
+
+    names = [name for name, t in TECHNIQUES.items() if t.applies(scene)]
+    results = {}
+    with StageBar(args.quiet, len(names), f"render {Path(scene.source).stem}", "technique") as bar:
+        for name in names:
+            results[name] = render(scene.replace(render=dataclasses.replace(scene.render, technique=name)),
+                                   stages=args.stages)
+            bar.stage(name)
+    physical = results["physical"].buffers
+    exposure, png_meta, phrase = preview_exposure(scene, physical["final"])
+    png_meta = {**png_meta, "vlref_exposure_rule": "physical's: " + png_meta["vlref_exposure_rule"]}
+    levels = {name: inscatter_level(r.buffers["inscatter"], physical["inscatter"]) for name, r in results.items()}
+    with output_dir(args.output) as out:
+        for name, result in results.items():
+            (out / name).mkdir()
+            save_render(out / name, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure,
+                        png_meta=png_meta)
+        sheet = contact_sheet([labelled(srgb8(r.buffers["final"], exposure), f"{name}  {levels[name]:.3g}x physical")
+                               for name, r in results.items()])
+        write_bytes(out / "sheet.png", png_bytes(sheet, png_meta))
+    if not args.quiet:
+        for name, result in results.items():
+            for note in result.notes:
+                print(f"vlref: note: {name}: {note}", file=sys.stderr)
+        print("level against physical (mean inscatter luminance ratio): "
+              + ", ".join(f"{name} {level:.3g}x" for name, level in levels.items()), file=sys.stderr)
+        print(f"wrote {args.output}/<technique>/ and {args.output}/sheet.png ({scene.render.width}x"
+              f"{scene.render.height}, {len(names)} techniques at one exposure; {phrase} of physical)", file=sys.stderr)
     return 0
