@@ -90,8 +90,8 @@ TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     Technique("killzone", killzone.render, KillzoneParams, every_scene, 360),
     Technique("slightlymad", slightlymad.render, SlightlyMadParams, every_scene, 300, slightlymad.notes),
     Technique("urp", urp.render, UrpParams, urp.has_main_light, 340),
-    Technique("radial", radial.render, RadialParams, radial.light_in_frame, 300),
-    Technique("froxel", froxel.render, FroxelParams, every_scene, 360),
+    Technique("radial", radial.render, RadialParams, radial.light_in_frame, 300, radial.notes),
+    Technique("froxel", froxel.render, FroxelParams, every_scene, 360, froxel.notes),
 )}
 """Every technique by name, in the order the golden suite and the listings use."""
 

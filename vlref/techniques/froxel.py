@@ -34,7 +34,7 @@ from ..medium import pack_medium
 from ..post.composite import composite_physical
 from . import resolved
 
-__all__ = ["render", "grid_bounds"]
+__all__ = ["render", "grid_bounds", "notes"]
 
 
 def grid_bounds(scene, camera) -> np.ndarray:
@@ -85,3 +85,12 @@ def render(scene, frame) -> dict:
     out.update({"froxel_integrated": grid_image(integrated), "inscatter": inscatter, "transmittance": trans,
                 "final": composite_physical(frame.scene_colour, trans, inscatter)})
     return out
+
+
+def notes(scene, out) -> list[str]:
+    """What ``vlref render`` tells the user: a single frame's vertical stripes in the haze are faithful."""
+    if scene.techniques.froxel.temporal:
+        return []
+    return ["froxel: vertical stripes in the haze are the grid's: one jittered light sample per froxel of a "
+            "single frame, faithful to Wronski/Hillaire; temporal = true over --frames averages them "
+            "(docs/TECHNIQUES.md, Faithful artifacts)"]

@@ -36,7 +36,7 @@ from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv,
                            occlusion_transparent, radial_blur, radiate)
 from ..post.upsample import bilinear_upsample
 
-__all__ = ["render", "radial_light", "light_target", "light_in_frame", "variant_params", "occlusion_buffer", "disc_coverage",
+__all__ = ["render", "notes", "radial_light", "light_target", "light_in_frame", "variant_params", "occlusion_buffer", "disc_coverage",
            "VARIANT_DEFAULTS"]
 
 VARIANT_DEFAULTS = {
@@ -157,3 +157,12 @@ def render(scene, frame) -> dict:
     inscatter = light_lo if (wo, ho) == (W, H) else bilinear_upsample(light_lo, (H, W))
     return {"occlusion": occ, "light_image": image, "radial": rad, "inscatter": inscatter,
             "transmittance": np.ones((H, W)), "final": composite_add(frame.scene_colour, inscatter)}
+
+
+def notes(scene, out) -> list[str]:
+    """What ``vlref render`` tells the user: without a medium, a hard horizon is faithful."""
+    if scene.lights[radial_light(scene)].type == "directional":
+        return []
+    return ["radial: no medium, so nothing dims the far scene: the hard horizon against the sky is the scene's "
+            "own, faithful to GPU Gems 3 ch. 13 (a screen-space blur around the light; docs/TECHNIQUES.md, "
+            "Faithful artifacts)"]

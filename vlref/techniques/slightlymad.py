@@ -300,8 +300,9 @@ def render(scene, frame) -> dict:
 
 
 def notes(scene, out) -> list[str]:
-    """What ``vlref render`` tells the user about this render: the VL defaults that replace the scene's own
-    settings (each with its switch), and how many march pixels saturate fp16 (65504) when ``fp16`` is on."""
+    """What ``vlref render`` tells the user about this render: that its banding, dither and halos are VL's, the
+    VL defaults that replace the scene's own settings (each with its switch), and how many march pixels
+    saturate fp16 (65504) when ``fp16`` is on."""
     p = scene.techniques.slightlymad
     kinds = {light.type for light in scene.lights}
     source = []
@@ -314,7 +315,9 @@ def notes(scene, out) -> list[str]:
         source.append('the spot cookie as the cone falloff (spot_cone = "scene")')
     if p.point_srgb_quirk and any(l.type == "point" and max(l.color) * l.intensity > 1.0 for l in scene.lights):
         source.append("point colour x intensity through sRGB->linear (point_srgb_quirk = false)")
-    lines = []
+    lines = ["slightlymad: horizontal banding, a checker dither and stair-stepped halos at depth edges are "
+             "VolumetricLights' own (8x8 Bayer ray offsets, chessboard depth, fp16, nearest-depth upsample): "
+             "faithful (docs/TECHNIQUES.md, Faithful artifacts)"]
     if source:
         lines.append("slightlymad uses VolumetricLights' defaults, not the scene's: " + "; ".join(source)
                      + " [techniques.slightlymad]")
