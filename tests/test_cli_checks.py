@@ -342,3 +342,21 @@ def test_compare_refuses_an_8bit_preview_unless_asked(tmp_path, capsys):
     assert "<command line>: test: " in err and "is an 8-bit image" in err and "--allow-8bit" in err
     assert main(["compare", str(tmp_path / "test.png"), str(tmp_path / "test.png"), "--allow-8bit", "-q",
                  "--no-flip"]) == 0
+
+
+def test_rendering_into_a_folder_of_an_earlier_run_notes_the_files_it_kept(tmp_path, capsys):
+    from vlref.cli import main
+
+    small = ["pillars", "-o", str(tmp_path / "o"), "--set", "render.width=16", "--set", "render.height=9"]
+    assert main(["render", *small, "--stages"]) == 0
+    staged = {p.name for p in (tmp_path / "o").iterdir()}
+    capsys.readouterr()
+    assert main(["render", *small]) == 0
+    err = capsys.readouterr().err
+    kept = staged - {"final.exr", "final.png", "depth.exr", "inscatter.exr", "transmittance.exr"}
+    assert kept and f"keeps {len(kept)} file(s) of an earlier run that this one did not write: " in err, err
+    assert main(["render", *small]) == 0 and "keeps" in capsys.readouterr().err
+    (tmp_path / "fresh").mkdir()
+    assert main(["render", "pillars", "-o", str(tmp_path / "fresh"), "--set", "render.width=16",
+                 "--set", "render.height=9"]) == 0
+    assert "keeps" not in capsys.readouterr().err

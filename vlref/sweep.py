@@ -24,7 +24,9 @@ Output folder (all or nothing, :func:`vlref.io.output_dir`), the same bytes what
 * ``reference/<n>.exr``: each reference's inscatter;
 * ``summary.csv`` (and ``summary.parquet`` when ``pyarrow`` is installed), one row per item:
   ``item, technique, point``, one column per varied key, ``reference``, and per metric:
-  ``error`` -> ``mean_abs, max_abs, mean_rel, max_rel`` (:func:`vlref.reference.bias.inscatter_error`),
+  ``error`` -> ``mean_abs, max_abs, mean_rel, max_rel`` (:func:`vlref.reference.bias.inscatter_error`:
+  ``mean_rel = Σ e / Σ max_c R``, ``max_rel = max e / max R``; different denominators, so ``mean_rel`` exceeds
+  ``max_rel`` when the error sits on pixels dimmer than the brightest),
   ``flip`` -> ``flip``, the mean HDR-FLIP of the final image against the reference's final image
   (empty when ``flip-evaluator`` is missing); ``file``;
 * ``timings.csv`` (metric ``time``): ``item, seconds`` of each render and reference, wall clock where it

@@ -58,9 +58,12 @@ def run(args) -> int:
 
         result = render(scene, stages=args.stages, progress=stage)
         exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
+        earlier = _files(args.output)
         with output_dir(args.output) as out:
             save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
+            kept = sorted(earlier - _files(out))
     if not args.quiet:
+        _note_kept(args.output, kept)
         for note in result.notes:
             print(f"vlref: note: {note}", file=sys.stderr)
         total = sum(result.timings.values())
@@ -75,6 +78,7 @@ def _render_frames(args, scene) -> int:
     from ..sequence import parse_frames, write_sequence
 
     frames = parse_frames(args.frames, scene)
+    earlier = _files(args.output)
     if scene.animation is None and not args.quiet:
         print(f"vlref: note: {Path(scene.source).name} has no [animation]: every frame shows the same scene "
               "(only render.frame's temporal jitter and froxel's history change); `vlref scenes` marks the "
@@ -82,7 +86,9 @@ def _render_frames(args, scene) -> int:
     with StageBar(args.quiet, len(frames), f"render {Path(scene.source).stem}", "frame") as bar, \
             output_dir(args.output) as out:
         write_sequence(out, scene, frames, args.stages, MAIN_BUFFERS, on_frame=lambda f: bar.stage())
+        kept = sorted(earlier - _files(out))
     if not args.quiet:
+        _note_kept(args.output, kept)
         print(f"wrote {args.output} (frames {frames.start}..{frames.stop - 1}, {scene.render.technique})",
               file=sys.stderr)
     return 0
@@ -106,6 +112,7 @@ def _render_all(args, scene) -> int:
     exposure, png_meta, phrase = preview_exposure(scene, physical["final"])
     png_meta = {**png_meta, "vlref_exposure_rule": "physical's: " + png_meta["vlref_exposure_rule"]}
     levels = {name: inscatter_level(r.buffers["inscatter"], physical["inscatter"]) for name, r in results.items()}
+    earlier = _files(args.output)
     with output_dir(args.output) as out:
         for name, result in results.items():
             (out / name).mkdir()
@@ -114,7 +121,9 @@ def _render_all(args, scene) -> int:
         sheet = contact_sheet([labelled(srgb8(r.buffers["final"], exposure), f"{name}  {levels[name]:.3g}x physical")
                                for name, r in results.items()])
         write_bytes(out / "sheet.png", png_bytes(sheet, png_meta))
+        kept = sorted(earlier - _files(out))
     if not args.quiet:
+        _note_kept(args.output, kept)
         for name, result in results.items():
             for note in result.notes:
                 print(f"vlref: note: {name}: {note}", file=sys.stderr)
@@ -123,3 +132,16 @@ def _render_all(args, scene) -> int:
         print(f"wrote {args.output}/<technique>/ and {args.output}/sheet.png ({scene.render.width}x"
               f"{scene.render.height}, {len(names)} techniques at one exposure; {phrase} of physical)", file=sys.stderr)
     return 0
+
+
+def _files(folder) -> set[str]:
+    """The files under ``folder`` (relative paths; none when it does not exist)."""
+    root = Path(folder)
+    return {str(p.relative_to(root)) for p in root.rglob("*") if p.is_file()} if root.is_dir() else set()
+
+
+def _note_kept(folder, kept: list[str]) -> None:
+    """Say which files of an earlier run the output folder still holds (a render replaces only its own)."""
+    if kept:
+        print(f"vlref: note: {folder} keeps {len(kept)} file(s) of an earlier run that this one did not write: "
+              f"{', '.join(kept[:4])}{', ...' if len(kept) > 4 else ''}", file=sys.stderr)
