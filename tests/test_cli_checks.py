@@ -200,7 +200,7 @@ def test_help_of_each_command_runs():
         assert r.returncode == 0 and "default" in r.stdout, args
 
 
-# ---------------------------------------------------------------- 8: issue 27, what a new user trips over
+# ---------------------------------------------------------------- 8: what a new user tripped over
 
 def test_golden_only_that_matches_nothing_is_bad_input(tmp_path, capsys):
     """A typo in --only must not turn the golden check into one that passes on nothing."""
@@ -360,3 +360,22 @@ def test_rendering_into_a_folder_of_an_earlier_run_notes_the_files_it_kept(tmp_p
     assert main(["render", "pillars", "-o", str(tmp_path / "fresh"), "--set", "render.width=16",
                  "--set", "render.height=9"]) == 0
     assert "keeps" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("scene, technique, sets, says", [
+    ("pillars", "slightlymad", [], "slightlymad: horizontal banding, a checker dither and stair-stepped halos"),
+    ("pillars", "froxel", [], "froxel: vertical stripes in the haze are the grid's"),
+    ("pillars", "froxel", ["techniques.froxel.temporal=true"], None),  # temporal: the stripes average out
+    ("pillars", "radial", [], "radial: no medium, so nothing dims the far scene"),  # a spot light
+    ("radial_sun", "radial", [], None),  # a directional light: no horizon note
+])
+def test_faithful_artifacts_are_named_in_the_render_note(tmp_path, capsys, scene, technique, sets, says):
+    from vlref.cli import main
+
+    sets = [x for s in ["render.width=16", "render.height=9", *sets] for x in ("--set", s)]
+    assert main(["render", scene, "--technique", technique, "-o", str(tmp_path / "o"), *sets]) == 0
+    notes = [l for l in capsys.readouterr().err.splitlines() if l.startswith("vlref: note: ")]
+    if says is None:
+        assert not any("faithful" in l for l in notes), notes
+    else:
+        assert any(says in l and "faithful" in l and "docs/TECHNIQUES.md" in l for l in notes), notes

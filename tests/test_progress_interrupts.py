@@ -164,7 +164,7 @@ techniques = ["physical", "killzone"]
 
 
 @pytest.mark.parametrize("argv, marker, sig", [
-    # the crash of issue 27: the signal arrived inside the boxing of the kernel's returned arrays
+    # the reference used to crash (SystemError): the signal arrived inside the boxing of the kernel's returned arrays
     (["reference", "pillars", *QUADRATURE, "-o", "out"], b"stage 4/4", signal.SIGINT),
     (["bias", "pillars", "--technique", "killzone", "--steps", "4,8", *QUADRATURE, "-o", "out"], b"bias pillars",
      signal.SIGTERM),

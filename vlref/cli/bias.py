@@ -6,7 +6,7 @@ import argparse
 
 from pathlib import Path
 
-from .options import add_scene_arguments, load_scene_checked, technique_names
+from .options import add_scene_arguments, load_scene_checked, technique_names, technique_rules
 from .progress_bar import StageBar
 
 HELP = "a technique's error against the reference, and how it falls with steps"
@@ -16,7 +16,7 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vlref bias")
     add_scene_arguments(p, required=True)
     p.add_argument("--technique", required=True, metavar="NAME",
-                   help=f"the technique to measure ({technique_names()}); required, no default")
+                   help=f"the technique to measure ({technique_names()}; {technique_rules()}); required, no default")
     p.add_argument("--steps", help="comma-separated step counts, e.g. 4,8,16,32 (default: 4,8,16,32,64)")
     p.add_argument("-o", "--output", help="write the error images and report here (default: print only)")
     return p

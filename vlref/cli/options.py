@@ -9,10 +9,16 @@ __all__ = ["add_scene_arguments", "add_scheduler_argument", "technique_names", "
 
 
 def technique_names() -> str:
-    """The techniques, comma-separated, for help texts, each with the scenes it applies to unless every scene."""
-    from ..techniques import APPLIES, TECHNIQUES
-    return ", ".join(n if APPLIES[n] == "every scene" else f"{n} ({APPLIES[n]})" for n in TECHNIQUES) + \
-        "; `vlref scenes` lists which apply to each bundled scene"
+    """The techniques, comma-separated, for help texts."""
+    from ..scene.model import TECHNIQUES
+    return ", ".join(TECHNIQUES)
+
+
+def technique_rules() -> str:
+    """Which scenes the techniques apply to, for help texts: each rule that is not 'every scene'."""
+    from ..techniques import APPLIES
+    return "; ".join(f"{n} applies to {rule}" for n, rule in APPLIES.items() if rule != "every scene") + \
+        " (`vlref scenes` lists the techniques of each bundled scene)"
 
 
 def add_scene_arguments(p: argparse.ArgumentParser, required: bool = False) -> None:

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import InputError
-from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names
+from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names, technique_rules
 from .progress_bar import StageBar
 
 HELP = "render a scene"
@@ -21,7 +21,8 @@ def parser() -> argparse.ArgumentParser:
     add_scene_arguments(p)
     p.add_argument("-o", "--output", default="out", help="output folder (default: out)")
     p.add_argument("--technique", metavar="NAME",
-                   help=f"technique ({technique_names()}); shortcut for --set render.technique=NAME; 'all': "
+                   help=f"technique ({technique_names()}); {technique_rules()}; shortcut for --set "
+                        "render.technique=NAME; 'all': "
                         "every technique that applies to the scene, one exposure for all, DIR/<technique>/ and "
                         "a labelled side-by-side DIR/sheet.png (default: the scene's render.technique, physical "
                         "when unset)")
