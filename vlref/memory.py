@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from .errors import InputError
+from .scene.load import parse_override
 
 __all__ = ["MemoryEstimate", "estimate", "available_bytes", "check_memory"]
 
@@ -107,8 +108,6 @@ def available_bytes() -> float | None:
 def _set_on_command_line(largest: str, overrides: Sequence[str]) -> str | None:
     """The ``--set`` item of ``overrides`` that sets what the estimate's ``largest`` part grows with (the image
     size for ``render.width``, that light's map resolution for ``lights[i].shadows.resolution``), or None."""
-    from .scene.load import parse_override
-
     causes = ({"render.width", "render.height"} if largest == "render.width"
               else {largest.replace("[", ".").replace("]", "")})
     for item in reversed(overrides):  # the last one wins, as when the scene is loaded

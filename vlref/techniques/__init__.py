@@ -33,6 +33,7 @@ from typing import Callable, Optional
 
 import numpy as np
 
+from ..scene import bundled_scenes, load_scene
 from ..scene.technique_params import (FroxelParams, KillzoneParams, PhysicalParams, RadialParams, SlightlyMadParams,
                                       UrpParams)
 
@@ -103,7 +104,5 @@ APPLIES = {"physical": "every scene", "killzone": "every scene", "slightlymad": 
 
 def suitable_scenes(technique: str) -> list[str]:
     """The bundled scenes that ``technique``'s ``applies`` rule accepts, by name."""
-    from ..scene import bundled_scenes, load_scene
-
     rule = TECHNIQUES[technique].applies
     return [name for name, path in bundled_scenes().items() if rule(load_scene(path))]
