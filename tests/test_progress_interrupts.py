@@ -155,9 +155,9 @@ def test_signal_mid_render_exits_cleanly(tmp_path, sig):
 
 
 QUADRATURE = ["--set", "render.width=160", "--set", "render.height=90"]  # a quadrature of several seconds
-# two references of about two seconds each: the bar shows once the first is done, the signal meets the second
+# two references of about a second each: the bar shows once the first is done, the signal meets the second
 SWEEP = """scene = "pillars"
-set = ["render.width=96", "render.height=54"]
+set = ["render.width=64", "render.height=36"]
 techniques = ["physical", "killzone"]
 [grid]
 "medium.anisotropy" = [0.0, 0.5]
