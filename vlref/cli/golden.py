@@ -6,6 +6,8 @@ import argparse
 import time
 from pathlib import Path
 
+from tqdm import tqdm
+
 from ..oracle.golden import SUITE_FILE
 from .options import add_scheduler_argument
 
@@ -32,7 +34,7 @@ def run(args) -> int:
     from ..io import check_output_dir
     from ..oracle.golden import build, build_dir, find_golden_dir, load_suite, select_entries, suite_entries, verify
 
-    log = (lambda *a, **k: None) if args.quiet else print
+    log = (lambda *a, **k: None) if args.quiet else tqdm.write  # lines above the items' progress bar
     start = time.perf_counter()
     if args.action == "list":
         for e in select_entries(suite_entries(load_suite(args.suite)), args.only):
