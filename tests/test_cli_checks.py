@@ -379,3 +379,23 @@ def test_faithful_artifacts_are_named_in_the_render_note(tmp_path, capsys, scene
         assert not any("faithful" in l for l in notes), notes
     else:
         assert any(says in l and "faithful" in l and "docs/TECHNIQUES.md" in l for l in notes), notes
+
+
+def test_sweep_summary_names_the_denominators_of_its_relative_errors(tmp_path):
+    """``mean_rel`` and ``max_rel`` divide by different things (so the first can exceed the second): the
+    summary holds both denominators, and each ratio times its own denominator gives back its error."""
+    import csv
+
+    from vlref.cli import main
+
+    spec = tmp_path / "sweep.toml"
+    spec.write_text('scene = "pillars"\nset = ["render.width=16", "render.height=9"]\ntechniques = ["killzone"]\n'
+                    'rel_tol = 1e-2\npoints = [["render.steps=4"], ["render.steps=16"]]\n')
+    assert main(["sweep", str(spec), "-o", str(tmp_path / "out"), "-q"]) == 0
+    rows = list(csv.DictReader((tmp_path / "out" / "summary.csv").open()))
+    assert len(rows) == 2
+    for row in rows:
+        v = {k: float(row[k]) for k in ("mean_abs", "max_abs", "mean_rel", "max_rel", "ref_sum", "ref_max")}
+        assert v["ref_max"] <= v["ref_sum"] <= 16 * 9 * v["ref_max"]
+        assert v["mean_rel"] * v["ref_sum"] == pytest.approx(v["mean_abs"] * 16 * 9, rel=1e-12)
+        assert v["max_rel"] * v["ref_max"] == pytest.approx(v["max_abs"], rel=1e-12)

@@ -24,8 +24,9 @@ Output folder (all or nothing, :func:`vlref.io.output_dir`), the same bytes what
 * ``reference/<n>.exr``: each reference's inscatter;
 * ``summary.csv`` (and ``summary.parquet`` when ``pyarrow`` is installed), one row per item:
   ``item, technique, point``, one column per varied key, ``reference``, and per metric:
-  ``error`` -> ``mean_abs, max_abs, mean_rel, max_rel`` (:func:`vlref.reference.bias.inscatter_error`:
-  ``mean_rel = Σ e / Σ max_c R``, ``max_rel = max e / max R``; different denominators, so ``mean_rel`` exceeds
+  ``error`` -> ``mean_abs, max_abs, mean_rel, max_rel, ref_sum, ref_max``
+  (:func:`vlref.reference.bias.inscatter_error`: ``mean_rel = Σ e / ref_sum``, ``ref_sum = Σ max_c R``;
+  ``max_rel = max e / ref_max``, ``ref_max = max R``; different denominators, so ``mean_rel`` exceeds
   ``max_rel`` when the error sits on pixels dimmer than the brightest),
   ``flip`` -> ``flip``, the mean HDR-FLIP of the final image against the reference's final image
   (empty when ``flip-evaluator`` is missing); ``file``;
@@ -50,7 +51,7 @@ from .errors import InputError
 __all__ = ["SweepSpec", "load_sweep", "sweep_items", "run_sweep", "METRICS"]
 
 METRICS = ("error", "time", "flip")
-ERROR_COLUMNS = ("mean_abs", "max_abs", "mean_rel", "max_rel")
+ERROR_COLUMNS = ("mean_abs", "max_abs", "mean_rel", "max_rel", "ref_sum", "ref_max")
 
 
 @dataclass(frozen=True)

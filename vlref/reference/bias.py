@@ -39,7 +39,7 @@ __all__ = ["DEFAULT_STEPS", "BiasReport", "technique_bias", "inscatter_error", "
 @dataclass
 class BiasReport:
     """See the module docstring. ``error`` (H, W) is ``e`` at ``steps_list[0]``; ``table`` rows are
-    dicts ``steps, mean_abs, max_abs, mean_rel, max_rel``."""
+    dicts ``steps`` and the keys of :func:`inscatter_error`."""
 
     technique: str
     error: np.ndarray
@@ -128,13 +128,16 @@ def loglog_slope(steps, errors) -> float:
 
 
 def inscatter_error(inscatter: np.ndarray, reference: np.ndarray) -> tuple[np.ndarray, dict]:
-    """Per-pixel ``e = max_c |L_c - R_c|`` (H, W) and ``mean_abs, max_abs, mean_rel, max_rel`` (module docstring)."""
+    """Per-pixel ``e = max_c |L_c - R_c|`` (H, W) and ``mean_abs, max_abs, mean_rel, max_rel`` (module docstring)
+    with the two denominators: ``ref_sum = Σ max_c R`` (of ``mean_rel``) and ``ref_max = max R`` (of ``max_rel``).
+    They differ, so ``mean_rel > max_rel`` where the error sits on pixels dimmer than the brightest."""
     r_max = reference.max(axis=-1)
     signal = float(r_max.sum())
     e = np.abs(np.asarray(inscatter, dtype=np.float64) - reference).max(axis=-1)
     return e, {"mean_abs": float(e.mean()), "max_abs": float(e.max()),
                "mean_rel": float(e.sum()) / signal if signal > 0 else 0.0,
-               "max_rel": float(e.max() / r_max.max()) if r_max.max() > 0 else 0.0}
+               "max_rel": float(e.max() / r_max.max()) if r_max.max() > 0 else 0.0,
+               "ref_sum": signal, "ref_max": float(r_max.max())}
 
 
 def technique_bias(scene, technique: str, steps_list=DEFAULT_STEPS, reference: ReferenceResult | None = None,
