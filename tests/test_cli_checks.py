@@ -237,6 +237,8 @@ def test_a_technique_that_needs_another_scene_names_the_bundled_scenes_that_suit
     err = capsys.readouterr().err
     assert 'needs a directional light' in err and "bundled scenes with one: " in err and "urp_sun" in err
     assert not (tmp_path / "o").exists()
+    assert main(["bias", "pillars", "--technique", "urp"]) == 2  # refused before the reference is computed
+    assert "urp_sun" in capsys.readouterr().err
     # radial renders any scene, but behind_camera's light projects behind the camera: a note says so
     assert main(["render", "behind_camera", "--technique", "radial", "-o", str(tmp_path / "r"),
                  "--set", "render.width=32", "--set", "render.height=18"]) == 0

@@ -46,11 +46,12 @@ def add_scheduler_argument(p: argparse.ArgumentParser) -> None:
 
 
 def load_scene_checked(args):
-    """The scene of ``args`` with its overrides; the output folder and the memory estimate are checked
-    first (before any work), unless ``--ignore-memory-check``."""
+    """The scene of ``args`` with its overrides; the output folder, the memory estimate (unless
+    ``--ignore-memory-check``) and the main light ``urp`` needs are checked first (before any work)."""
     from ..io import check_output_dir
     from ..memory import check_memory
     from ..scene import load_scene
+    from ..techniques.urp import main_light
 
     if getattr(args, "output", None):
         check_output_dir(args.output)
@@ -58,6 +59,8 @@ def load_scene_checked(args):
     if getattr(args, "technique", None):
         overrides.append(f'render.technique="{args.technique}"')
     scene = load_scene(args.scene, overrides)
+    if scene.render.technique == "urp":
+        main_light(scene)  # InputError naming the bundled scenes that have one
     if not args.ignore_memory_check:
         check_memory(scene, overrides=list(args.set or []))
     return scene
