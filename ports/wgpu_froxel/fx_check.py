@@ -1,0 +1,176 @@
+"""Check the WebGPU froxel port against vlref: every pass of every frame, every variant; prints the README's tables.
+
+    python ports/wgpu_froxel/fx_check.py [--scene anim_spot] [--frames 4] [--size 96x54] [--grid 20x12x16]
+                                         [--set K=V ...] [-o DIR] [--timing-size 1920x1080]
+
+Steps (docs/PORTING.md §5, in-process): the port renders frames 0 .. N-1 and exports each frame's raster
+buffers and manifest (:func:`fx_port.export`); ``vlref march`` runs the froxel technique on them frame by
+frame, carrying vlref's own history (:func:`vlref.port.march_sequence`, the CLI's ``vlref march
+frame_0000/port.toml frame_0001/port.toml ... --stages``); each exported pass of each frame is compared
+with vlref's buffer of that name under its preset (:data:`PASSES`); then every variant (:mod:`fx_variants`)
+re-runs the froxel passes of the whole sequence on the same raster buffers and is judged the same way.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+
+import fx_port  # noqa: E402
+import kz_scene  # noqa: E402
+from fx_variants import VARIANTS  # noqa: E402
+
+PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-full"),
+          ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
+          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-half"), ("transmittance", "gpu-half"),
+          ("final", "gpu-half"))
+"""(buffer, preset). The slice boundaries are float32 host values: ``float32``. The grids are rgba16float
+(one fp16 rounding per store, none filtered except the history fetch, whose weights the fp16 grid
+dominates): ``gpu-full``. The apply pass reads the integrated grid through the hardware trilinear
+sampler, whose sub-texel weights are 8-bit fractions on real GPUs (up to 1/512 of the difference between
+neighbouring texels, which in depth can be as large as the value itself): ``gpu-half``, the preset that
+states it absorbs 8-bit filtering weights (variant ``weights8`` emulates them on any adapter)."""
+
+SEQUENCE = ("techniques.froxel.temporal=true", "techniques.froxel.history_clamp=true")
+"""Scene settings of every checked sequence: temporal with the clamp (which a planted bug leaves out)."""
+
+
+def compare(ref, test, preset: str):
+    """``vlref compare``'s rule on two arrays (a report: passed, checks, metrics)."""
+    from vlref.oracle.compare import compare_arrays
+    from vlref.oracle.presets import tolerance
+
+    ref, test = np.asarray(ref, dtype=np.float64), np.asarray(test, dtype=np.float64)
+    ref = ref[..., None] if ref.ndim == 2 else ref
+    test = test[..., None] if test.ndim == 2 else test
+    return compare_arrays(ref, test, tolerance(preset), None, flip=False)
+
+
+def margins(report) -> tuple[float, float]:
+    """(failing fraction / its bound, mean error / its bound); a bound of 0 (exact) counts any error as inf."""
+    out = []
+    for c in report.checks[:2]:
+        out.append(c.value / c.bound if c.bound > 0 else (0.0 if c.value == 0 else np.inf))
+    return out[0], out[1]
+
+
+def setup(scene_ref: str, frames: int, overrides=(), dev=None):
+    """The port's raster passes over ``frames`` frames (``SEQUENCE`` settings added)."""
+    overrides = [*SEQUENCE, *overrides]
+    return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev), overrides
+
+
+def reference(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path) -> list[dict]:
+    """Export the port's raster buffers per frame and run vlref's froxel technique on them in sequence."""
+    from vlref.port import load_port, march_sequence
+
+    manifests = fx_port.export(port, out_dir, scene_ref, overrides)
+    return list(march_sequence([load_port(m) for m in manifests]))
+
+
+def judge(port_frames: list[dict], ref_frames: list[dict]):
+    """``[(frame, buffer, preset, report)]`` for every pass of every frame."""
+    rows = []
+    for f, (got, want) in enumerate(zip(port_frames, ref_frames)):
+        for name, preset in PASSES:
+            if name in got:
+                rows.append((f, name, preset, compare(want[name], got[name], preset)))
+    return rows
+
+
+def verdict(rows):
+    """(passed, worst margin over every check, (frame, buffer) of the worst): a variant's summary."""
+    worst, where = 0.0, None
+    for f, name, _, rep in rows:
+        m = max(margins(rep))
+        if m > worst:
+            worst, where = m, (f, name)
+    return all(rep.passed for *_, rep in rows), worst, where
+
+
+def first_failure(rows):
+    """(frame, buffer) of the first failing check in frame/pass order, or None."""
+    return next(((f, name) for f, name, _, rep in rows if not rep.passed), None)
+
+
+def timing(scene_ref: str, size: str, frames: int, dev=None) -> tuple[str, dict]:
+    """Per-pass times (ms per frame, frames 1 .. N-1: frame 0 compiles the pipelines) at ``size``."""
+    w, h = size.lower().split("x")
+    port, _ = setup(scene_ref, frames, [f"render.width={int(w)}", f"render.height={int(h)}"], dev)
+    port.run()
+    port.timings.clear()
+    port.setups = port.setups[1:]
+    port.run()
+    kind = "GPU timestamps" if port.timestamps else "CPU wall time around submit + read-back"
+    return kind, {k: 1e3 * v / len(port.setups) for k, v in port.timings.items()}
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--scene", action="append", default=None, help="bundled scene or file (repeatable; "
+                    "default anim_spot and anim_sun)")
+    ap.add_argument("--frames", type=int, default=4)
+    ap.add_argument("--size", default="96x54")
+    ap.add_argument("--grid", default="20x12x16", help="froxel grid gw x gh x D")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
+    ap.add_argument("-o", "--output", default=None, help="keep the exported buffers here")
+    ap.add_argument("--timing-size", default=None, help="also time the passes at WxH (e.g. 1920x1080)")
+    args = ap.parse_args(argv)
+    w, h = args.size.lower().split("x")
+    gw, gh, d = args.grid.lower().split("x")
+    base = [f"render.width={int(w)}", f"render.height={int(h)}", f"techniques.froxel.grid_width={int(gw)}",
+            f"techniques.froxel.grid_height={int(gh)}", f"techniques.froxel.slices={int(d)}", *args.set]
+    out = Path(args.output or tempfile.mkdtemp(prefix="fx-check-"))
+    dev = fx_port.device()
+    print(f"device: {dev[0].info['device']}; {w}x{h}, grid {gw}x{gh}x{d}, {args.frames} frames; buffers in {out}")
+    ok = True
+    results: dict[str, dict] = {}
+    for scene in args.scene or ["anim_spot", "anim_sun"]:
+        overrides = [*base, "lights.0.shadows.resolution=256"] if scene == "anim_spot" else base
+        start = time.perf_counter()
+        port, overrides = setup(scene, args.frames, overrides, dev)
+        refs = reference(port, scene, overrides, out / scene)
+        t_ref = time.perf_counter() - start
+        rows = judge(port.run("faithful"), refs)
+        print(f"\n### {scene} (raster + vlref march {t_ref:.1f} s)\n")
+        print("| frame | buffer | preset | result | failing pixels | failing fraction | mean error |")
+        print("|---|---|---|---|---|---|---|")
+        for f, name, preset, rep in rows:
+            fr, me = margins(rep)
+            ok &= rep.passed
+            print(f"| {f} | {name} | {preset} | {'PASS' if rep.passed else 'FAIL'} | "
+                  f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {fr:.3f}x | "
+                  f"{me:.3f}x |")
+        for name in VARIANTS:
+            results.setdefault(name, {})[scene] = judge(port.run(name), refs) if name != "faithful" else rows
+    print("\n| variant | expected | verdict | first failing (scene, frame, pass) | worst margin (scene, frame, pass) |")
+    print("|---|---|---|---|---|")
+    for name, v in VARIANTS.items():
+        per = results[name]
+        passed = all(verdict(rows)[0] for rows in per.values())
+        worst = max(((verdict(rows)[1], s, verdict(rows)[2]) for s, rows in per.items()), key=lambda t: t[0])
+        first = next(((s, first_failure(rows)) for s, rows in per.items() if first_failure(rows)), None)
+        good = passed if v.expect == "pass" else not passed
+        good &= worst[0] <= 0.5 if v.expect == "pass" else True
+        ok &= good
+        where = f"{first[0]}, {first[1][0]}, {first[1][1]}" if first else "-"
+        print(f"| `{name}`: {v.description} | {v.expect} | {'PASS' if passed else 'FAIL'}{'' if good else ' (WRONG)'}"
+              f" | {where} | {worst[0]:.3g}x ({worst[1]}, {worst[2][0]}, {worst[2][1]}) |")
+    if args.timing_size:
+        for scene in args.scene or ["anim_spot", "anim_sun"]:
+            kind, ms = timing(scene, args.timing_size, 3, dev)
+            print(f"\n{scene} at {args.timing_size} ({kind}), ms per frame: "
+                  + ", ".join(f"{k} {v:.3f}" for k, v in ms.items()) + f", total {sum(ms.values()):.3f}")
+    return 0 if ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
