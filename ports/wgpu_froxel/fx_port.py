@@ -161,7 +161,8 @@ class FroxelPort:
         self.params = p
         self.gw, self.gh, self.d = p.grid_width, p.grid_height, p.slices
         self.timestamps = "timestamp-query" in self.device.features
-        self.timings: dict[str, float] = {}
+        self.timings: dict[str, float] = {}        # per pass: GPU timestamps (ns ticks) if available, else wall
+        self.wall_timings: dict[str, float] = {}   # per pass: CPU wall time around submit + wait
         self.setups = []
         for f in frames:
             s = scene_at(scene.replace(render=dataclasses.replace(scene.render, frame=int(f))))
@@ -201,8 +202,9 @@ class FroxelPort:
                                           format="rgba16float", usage=self.grid_usage)
 
     def _dispatch(self, name, pipeline, resources: dict, groups):
-        """One compute pass in its own submission: GPU time from timestamps when the adapter has them,
-        else the CPU wall time around submit + wait (both summed into ``timings``)."""
+        """One compute pass in its own submission: GPU time from timestamps when the adapter has them, else the
+        CPU wall time around submit + wait, summed into ``timings``; the wall time also into ``wall_timings``.
+        Timestamps are read as nanoseconds (wgpu-py exposes no timestamp period; NVIDIA's Vulkan period is 1 ns)."""
         entries = [{"binding": b, "resource": r} for b, r in resources.items()]
         bind = self.device.create_bind_group(layout=pipeline.get_bind_group_layout(0), entries=entries)
         enc = self.device.create_command_encoder()
@@ -217,13 +219,14 @@ class FroxelPort:
             enc.resolve_query_set(self._queries, 0, 2, self._resolved, 0)
         start = time.perf_counter()
         self.device.queue.submit([enc.finish()])
-        if self.timestamps:
+        if self.timestamps:   # read_buffer waits for the queue (wgpu-py 0.32's work-done callback is broken)
             t0, t1 = np.frombuffer(bytes(self.device.queue.read_buffer(self._resolved)), dtype=np.uint64)
-            seconds = float(t1 - t0) * 1e-9
         else:
             self.device.queue.read_buffer(self.setups[0].raster._fence)
-            seconds = time.perf_counter() - start
+        wall = time.perf_counter() - start
+        seconds = float(t1 - t0) * 1e-9 if self.timestamps else wall
         self.timings[name] = self.timings.get(name, 0.0) + seconds
+        self.wall_timings[name] = self.wall_timings.get(name, 0.0) + wall
 
     def _groups(self, n: int, partial: bool) -> int:
         return n // GROUP if partial else -(-n // GROUP)
