@@ -100,8 +100,8 @@ def verdict(rows):
 
 
 def first_failure(rows):
-    """(frame, buffer) of the first failing check in frame/pass order, or None."""
-    return next(((f, name) for f, name, _, rep in rows if not rep.passed), None)
+    """(frame, buffer, margin) of the first failing check in frame/pass order, or None."""
+    return next(((f, name, max(margins(rep))) for f, name, _, rep in rows if not rep.passed), None)
 
 
 def timing(scene_ref: str, size: str, grid: str, frames: int, dev=None) -> tuple[str, dict, dict]:
@@ -169,7 +169,7 @@ def main(argv=None) -> int:
                   f"worst {worst[0]:.3f}x (frame {worst[1]}, {worst[2]})")
         for name in VARIANTS:
             results.setdefault(name, {})[scene] = judge(port.run(name), refs) if name != "faithful" else rows
-    print("\n| variant | expected | verdict | first failing (scene, frame, pass) | worst margin (scene, frame, pass) |")
+    print("\n| variant | expected | verdict | first failing (scene, frame, pass): margin | worst margin (scene, frame, pass) |")
     print("|---|---|---|---|---|")
     for name, v in VARIANTS.items():
         per = results[name]
@@ -179,7 +179,7 @@ def main(argv=None) -> int:
         good = passed if v.expect == "pass" else not passed
         good &= worst[0] <= 0.5 if v.expect == "pass" else True
         ok &= good
-        where = f"{first[0]}, {first[1][0]}, {first[1][1]}" if first else "-"
+        where = f"{first[0]}, {first[1][0]}, {first[1][1]}: {first[1][2]:.3g}x" if first else "-"
         print(f"| `{name}`: {v.description} | {v.expect} | {'PASS' if passed else 'FAIL'}{'' if good else ' (WRONG)'}"
               f" | {where} | {worst[0]:.3g}x ({worst[1]}, {worst[2][0]}, {worst[2][1]}) |")
     if args.timing_size:
