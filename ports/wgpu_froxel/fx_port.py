@@ -127,6 +127,13 @@ class Raster(kz_port.KillzonePort):
             raise ValueError("the froxel port does not implement: " + ", ".join(problems))
 
 
+def unshadowed_directional(scene) -> list[str]:
+    """``--set`` overrides turning off the shadows of ``scene``'s directional lights, which this port cannot
+    render (no cascades): with them in the manifest's ``set`` vlref judges those lights unshadowed too."""
+    return [f"lights.{i}.shadows.enabled=false" for i, li in enumerate(scene.lights)
+            if li.type == "directional" and li.shadows is not None and li.shadows.enabled]
+
+
 def raster_scene(scene):
     """``scene`` as the killzone raster sees it: directional lights dark and unshadowed (see :class:`Raster`)."""
     lights = tuple(dataclasses.replace(li, intensity=0.0, shadows=None) if li.type == "directional" else li
@@ -163,6 +170,7 @@ class FroxelPort:
         self.timestamps = "timestamp-query" in self.device.features
         self.timings: dict[str, float] = {}        # per pass: GPU timestamps (ns ticks) if available, else wall
         self.wall_timings: dict[str, float] = {}   # per pass: CPU wall time around submit + wait
+        self.frame_timings: list[tuple[dict, dict]] = []   # of the last run: (timings, wall_timings) per frame
         self.setups = []
         for f in frames:
             s = scene_at(scene.replace(render=dataclasses.replace(scene.render, frame=int(f))))
@@ -255,7 +263,9 @@ class FroxelPort:
         tiles = [d.create_buffer(size=4 * self.gw * self.gh, usage=storage) for _ in range(2)]
         prev = None        # (view_proj, bounds) of the previous frame
         out = []
+        self.frame_timings = []
         for i, fs in enumerate(self.setups):
+            before, wall_before = dict(self.timings), dict(self.wall_timings)
             r, cam = fs.raster, fs.raster.cam
             lam = spec.depth_distribution if spec.depth_distribution is not None else p.depth_distribution
             bounds = slice_bounds(*fs.near_far, self.d, lam)
@@ -309,6 +319,8 @@ class FroxelPort:
             buffers.update({"inscatter": lt[..., :3], "transmittance": lt[..., 3], "final": r.read(final)[..., :3]})
             out.append(buffers)
             prev = (vp, bounds)
+            self.frame_timings.append(({k: v - before.get(k, 0.0) for k, v in self.timings.items()},
+                                       {k: v - wall_before.get(k, 0.0) for k, v in self.wall_timings.items()}))
         return out
 
 

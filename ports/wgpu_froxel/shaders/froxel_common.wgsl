@@ -23,7 +23,8 @@ const PI: f32 = 3.14159265358979;
 // Unit world ray through screen uv (u right, v down from the top): the camera's NDC (2u - 1, 1 - 2v).
 fn screen_ray(uv: vec2f) -> vec3f {
     let t = fx.cam.x;
-    return normalize(fx.fwd.xyz + ((2.0 * uv.x - 1.0) * t * fx.cam.y) * fx.right.xyz + ((1.0 - 2.0 * uv.y) * t) * fx.up.xyz);
+    let ndc = vec2f(2.0 * uv.x - 1.0, 1.0 - 2.0 * uv.y);
+    return normalize(fx.fwd.xyz + (ndc.x * t * fx.cam.y) * fx.right.xyz + (ndc.y * t) * fx.up.xyz);
 }
 
 // The ray of column c, row r of this frame's grid through slice coordinates (c + ox, r + oy).
