@@ -123,6 +123,29 @@ def timing(scene_ref: str, size: str, grid: str, frames: int, dev=None) -> tuple
     return kind, mean[0], mean[1]
 
 
+def verdict_manifest(manifest: Path) -> Path:
+    """Add to an exported frame's manifest what ``vlref verdict`` reads (branch i24-verdict, NOTES.md): the
+    port's ``final`` and a ``[[passes]]`` entry per :data:`PASSES` buffer but ``froxel_history_valid`` (all
+    zero on a first frame, which the verdict refuses as proving nothing)."""
+    top = 'colour = "colour.npy"\n'
+    text = manifest.read_text().replace(top, top + 'final = "port_final.npy"\n', 1)
+    for name, preset in PASSES:
+        if name != "froxel_history_valid":
+            text += f'\n[[passes]]\nname = "{name}"\nbuffer = "{name}"\npath = "port_{name}.npy"\npreset = "{preset}"\n'
+    manifest.write_text(text)
+    return manifest
+
+
+def scene_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path):
+    """The whole-frame verdict (``vlref.oracle.verdict.judge``: own buffers and against the scene) of the
+    faithful port's first frame. The verdict marches one manifest without history, so of a temporal sequence
+    only the first frame, which has none on either side, is comparable."""
+    from vlref.oracle.verdict import judge   # branch i24-verdict; absent before it is merged
+
+    first = fx_port.export(port, out_dir, scene_ref, overrides, port.run("faithful"))[0]
+    return judge(verdict_manifest(first), out_dir=out_dir / "verdict")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--scene", action="append", default=None, help="bundled scene or file (repeatable; "
@@ -134,6 +157,8 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", default=None, help="keep the exported buffers here")
     ap.add_argument("--timing-size", default=None, help="also time the passes at WxH (e.g. 1920x1080)")
     ap.add_argument("--timing-grid", default="160x90x64", help="grid of the timing run (default 160x90x64)")
+    ap.add_argument("--verdict", action="store_true", help="also judge each scene's first frame with `vlref "
+                    "verdict` (own buffers and against the scene; needs vlref.oracle.verdict)")
     args = ap.parse_args(argv)
     w, h = args.size.lower().split("x")
     gw, gh, d = args.grid.lower().split("x")
@@ -160,6 +185,9 @@ def main(argv=None) -> int:
             print(f"| {f} | {name} | {preset} | {'PASS' if rep.passed else 'FAIL'} | "
                   f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {fr:.3f}x | "
                   f"{me:.3f}x |")
+        if args.verdict:
+            v = scene_verdict(port, scene, overrides, out / f"{scene}_verdict")
+            print(f"\n`vlref verdict` of frame 0: {'PASS' if v.passed else 'FAIL'}\n\n{v.table()}")
         for name in ("faithful", "weights8"):
             frames = port.run(name)
             reps = [(f, b, compare(refs[f][b], frames[f][b], "gpu-full")) for f in range(len(refs))
