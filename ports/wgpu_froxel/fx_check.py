@@ -66,10 +66,8 @@ def margins(report) -> tuple[float, float]:
 
 
 def setup(scene_ref: str, frames: int, overrides=(), dev=None):
-    """The port's raster passes over ``frames`` frames: ``(port, overrides)``, the overrides with ``SEQUENCE``
-    added and the shadows of directional lights turned off (:func:`fx_port.unshadowed_directional`)."""
+    """The port's raster passes over ``frames`` frames: ``(port, overrides)``, ``SEQUENCE`` added."""
     overrides = [*SEQUENCE, *overrides]
-    overrides += fx_port.unshadowed_directional(kz_scene.load(scene_ref, overrides))
     return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev), overrides
 
 

@@ -92,17 +92,23 @@ def jitter(frame: int, mode: str, period: int) -> tuple[float, float, float]:
     return tuple(radical_inverse(frame % period + 1, b) for b in (2, 3, 5))
 
 
-def light_blocks(scene, layers) -> np.ndarray:
-    """The ``Light`` array of lights.wgsl; ``shadow.w`` carries the filter (0 hard, 1 pcf), directional
-    lights kind 2 with their unit direction of travel and ``colour · intensity``."""
+def light_blocks(scene, layers, cascade_first) -> np.ndarray:
+    """The ``Light`` array of lights.wgsl; ``shadow.w`` carries the filter (0 hard, 1 pcf). Directional
+    lights: kind 2, unit direction of travel, ``colour · intensity``, the light frame's right and up, and
+    ``shadow = (first cascade or -1, resolution, -, filter)``, ``cone.x`` = the number of cascades."""
     out = []
-    for light, layer in zip(scene.lights, layers):
+    for light, layer, first in zip(scene.lights, layers, cascade_first):
         if light.type == "directional":
             b = np.zeros(32, dtype=np.float32)
-            d = np.asarray(light.direction, dtype=np.float64)
-            b[3], b[4:7] = KIND_DIRECTIONAL, d / np.linalg.norm(d)
+            frame = kz_scene.look_frame(light.direction)
+            b[3], b[4:7] = KIND_DIRECTIONAL, frame[:, 2]
             b[8:11] = np.asarray(light.color) * light.intensity
-            b[28] = -1.0
+            b[12:15], b[16:19] = frame[:, 0], frame[:, 1]
+            b[28] = first
+            sh = light.shadows
+            if first >= 0:
+                b[11], b[20], b[29] = sh.strength, sh.cascades, sh.resolution
+                b[31] = 1.0 if sh.filter == "pcf" else 0.0
         else:
             b = kz_scene.light_block(light, layer)
             b[31] = 1.0 if light.shadows and light.shadows.filter == "pcf" else 0.0
@@ -110,10 +116,39 @@ def light_blocks(scene, layers) -> np.ndarray:
     return np.concatenate(out)
 
 
+def cascade_splits(near: float, far: float, count: int, lam: float) -> np.ndarray:
+    """Cascade split depths: the practical split scheme ``λ n (f/n)^{i/N} + (1 − λ)(n + (f − n) i/N)``."""
+    i = np.arange(count + 1) / count
+    return lam * near * (far / near) ** i + (1.0 - lam) * (near + (far - near) * i)
+
+
+def frustum_sphere(cam, z0: float, z1: float) -> tuple[np.ndarray, float]:
+    """Bounding sphere of the view-frustum slice between eye depths z0 and z1: its 8 corners' mean, and
+    their largest distance from it (the region a cascade covers)."""
+    t = math.tan(math.radians(cam.fov) / 2.0)
+    aspect = cam.width / cam.height
+    corners = np.array([cam.eye + cam.frame @ [sx * z * t * aspect, sy * z * t, z]
+                        for z in (z0, z1) for sx in (-1, 1) for sy in (-1, 1)])
+    centre = corners.mean(axis=0)
+    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
+
+
+def orthographic_reversed(half: float, far: float) -> np.ndarray:
+    """View -> clip of a square orthographic tile of half-size ``half``, depth ``1 − z/far`` (reversed-Z, near 0)."""
+    p = np.diag([1.0 / half, 1.0 / half, -1.0 / far, 1.0])
+    p[2, 3] = 1.0
+    return p
+
+
 class Raster(kz_port.KillzonePort):
-    """The killzone port's raster passes (depth, shadow maps, scene colour) for a froxel scene: the
-    killzone checks do not apply. Directional lights are neither rasterised nor lit by it (it has no
-    cascades): the caller passes them with intensity 0 and no shadows."""
+    """The killzone port's raster passes (depth, spot and cube shadow maps, scene colour) for a froxel scene,
+    plus the cascaded maps of directional lights (:meth:`render_cascades`). The killzone raster neither lights
+    nor shadows directional lights: it sees them dark (:func:`raster_scene`), so the scene colour lacks them."""
+
+    def __init__(self, scene, dev):
+        super().__init__(raster_scene(scene), dev)
+        self.full_scene = scene
+        self.render_cascades()
 
     @staticmethod
     def _check_scene(scene):
@@ -126,12 +161,79 @@ class Raster(kz_port.KillzonePort):
         if problems:
             raise ValueError("the froxel port does not implement: " + ", ".join(problems))
 
+    def render_cascades(self):
+        """Per directional light with shadows: ``shadows.cascades`` orthographic reversed-Z maps, one per slice
+        of the view frustum between the split depths (up to ``min(shadows.distance, camera.far)``), each
+        covering the slice's bounding sphere in the light's frame (``look_frame(direction)``), its view plane
+        ``back`` before the centre so that every caster lies in front. Fills ``cascade_tex`` (depth32float
+        array), ``cascade_info`` (per cascade: centre, radius; back, far), ``cascade_first`` (per light: its
+        first cascade or -1), ``cascade_splits`` (per light) and ``cascade_tiles`` (light, view, projection,
+        layer, res)."""
+        wgpu, cam, d = self.wgpu, self.cam, self.device
+        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)
+        verts = tris[:, :3].astype(np.float64)
+        self.cascade_first, self.cascade_tiles, self.cascade_splits, info, blocks = [], [], {}, [], []
+        res = 1
+        for i, light in enumerate(self.full_scene.lights):
+            sh = light.shadows
+            if light.type != "directional" or sh is None or not sh.enabled:
+                self.cascade_first.append(-1)
+                continue
+            self.cascade_first.append(len(self.cascade_tiles))
+            res = max(res, sh.resolution)
+            frame = kz_scene.look_frame(light.direction)
+            fwd = frame[:, 2]
+            far_c = min(sh.distance, cam.far)
+            splits = cascade_splits(cam.near, max(far_c, cam.near * (1.0 + 1e-6)), sh.cascades, sh.split_lambda)
+            self.cascade_splits[i] = splits
+            for k in range(sh.cascades):
+                centre, radius = frustum_sphere(cam, splits[k], splits[k + 1])
+                back = radius + max(0.0, float(((centre - verts) @ fwd).max())) + 1.0
+                far = back + radius
+                view = kz_scene.view_matrix(centre - back * fwd, frame)
+                proj = orthographic_reversed(radius, far)
+                info.append([*centre, radius, back, far, 0.0, 0.0])
+                blocks.append((np.concatenate([(proj @ view).T.reshape(-1), view.T.reshape(-1),
+                                               [0.0, far, sh.bias, sh.slope_bias]]), sh.resolution))
+                self.cascade_tiles.append((i, view, proj, len(self.cascade_tiles), sh.resolution))
+        self.cascade_info = self._buffer(np.asarray(info or [[0.0] * 8]), wgpu.BufferUsage.STORAGE)
+        self.cascade_tex = d.create_texture(size=(res, res, max(len(blocks), 1)), format="depth32float",
+                                            usage=self.rt_usage)
+        if not blocks:
+            return
+        module = d.create_shader_module(code=(SHADERS / "cascade.wgsl").read_text())
+        layout = {"array_stride": 36, "step_mode": "vertex", "attributes": [
+            {"format": "float32x3", "offset": 0, "shader_location": 0},
+            {"format": "float32x3", "offset": 12, "shader_location": 1},
+            {"format": "float32x3", "offset": 24, "shader_location": 2}]}
+        pipe = d.create_render_pipeline(
+            layout="auto", vertex={"module": module, "entry_point": "vs_main", "buffers": [layout]},
+            primitive={"topology": "triangle-list", "cull_mode": "none"},
+            depth_stencil={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"},
+            multisample=None, fragment={"module": module, "entry_point": "fs_main", "targets": []})
+        vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
+        binds = [(self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]), r) for b, r in blocks]
 
-def unshadowed_directional(scene) -> list[str]:
-    """``--set`` overrides turning off the shadows of ``scene``'s directional lights, which this port cannot
-    render (no cascades): with them in the manifest's ``set`` vlref judges those lights unshadowed too."""
-    return [f"lights.{i}.shadows.enabled=false" for i, li in enumerate(scene.lights)
-            if li.type == "directional" and li.shadows is not None and li.shadows.enabled]
+        def cascades(enc):
+            for layer, (bind, r) in enumerate(binds):
+                view = self.cascade_tex.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
+                rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
+                    "view": view, "depth_clear_value": 0.0, "depth_load_op": "clear", "depth_store_op": "store"})
+                rp.set_pipeline(pipe)
+                rp.set_bind_group(0, bind)
+                rp.set_viewport(0, 0, r, r, 0, 1)
+                rp.set_vertex_buffer(0, vbuf)
+                rp.draw(len(tris))
+                rp.end()
+
+        self._timed("cascades", cascades)
+
+    def raster_buffers(self) -> dict:
+        """The killzone raster's buffers, with each cascade as a tile of its light (no face name)."""
+        out = super().raster_buffers()
+        out["tiles"] += [(i, "", view, proj, self.read(self.cascade_tex, layer)[:res, :res])
+                         for i, view, proj, layer, res in self.cascade_tiles]
+        return out
 
 
 def raster_scene(scene):
@@ -174,7 +276,7 @@ class FroxelPort:
         self.setups = []
         for f in frames:
             s = scene_at(scene.replace(render=dataclasses.replace(scene.render, frame=int(f))))
-            raster = Raster(raster_scene(s), (self.adapter, self.device))
+            raster = Raster(s, (self.adapter, self.device))
             cam = raster.cam
             far = max(min(s.render.max_distance, cam.far), cam.near * (1.0 + 1e-6))
             self.setups.append(FrameSetup(int(f), s, raster, (cam.near, far)))
@@ -284,11 +386,13 @@ class FroxelPort:
                                     [float(p.history_clamp), float(prev is not None), 0, 0]])
             fx = {"buffer": self._buffer(block, uniform), "offset": 0, "size": block.size * 4}
             sl = {"buffer": slices, "offset": 0, "size": slices.size}
-            lights = self._buffer(light_blocks(fs.scene, r.layers), storage)
+            lights = self._buffer(light_blocks(fs.scene, r.layers, r.cascade_first), storage)
             scatter, integrated = self._grid(), self._grid()
             self._dispatch("inject", self._pipeline("inject", ov), {
                 0: fx, 1: sl, 2: {"buffer": lights, "offset": 0, "size": lights.size},
-                3: r.shadow.create_view(dimension="2d-array"), 4: scatter.create_view()}, (gx, gy, self.d))
+                3: r.shadow.create_view(dimension="2d-array"), 4: scatter.create_view(),
+                5: r.cascade_tex.create_view(dimension="2d-array"),
+                6: {"buffer": r.cascade_info, "offset": 0, "size": r.cascade_info.size}}, (gx, gy, self.d))
             lit = scatter
             if p.temporal:
                 cur, old = i % 2, (i + 1) % 2
@@ -331,8 +435,14 @@ def export(port: FroxelPort, out_dir, scene_ref: str, overrides=(), frames_out=N
     ``render.frame=F`` in its ``set``) and every froxel pass as ``port_<buffer>.npy``; the manifests' paths."""
     paths = []
     for fs, passes in zip(port.setups, frames_out or [{}] * len(port.setups)):
-        paths.append(kz_port.export(fs.raster, Path(out_dir) / f"frame_{fs.frame:04d}", scene_ref,
-                                    [*overrides, f"render.frame={fs.frame}"], passes))
+        path = kz_port.export(fs.raster, Path(out_dir) / f"frame_{fs.frame:04d}", scene_ref,
+                              [*overrides, f"render.frame={fs.frame}"], passes)
+        text = path.read_text()
+        for i, splits in fs.raster.cascade_splits.items():   # cascades: their split depths (PORTING §2)
+            head = f"[[shadow_maps]]\nlight = {i}\n"
+            text = text.replace(head, head + f"splits = {kz_port._toml(splits)}\n")
+        path.write_text(text)
+        paths.append(path)
     return paths
 
 

@@ -7,15 +7,22 @@
 @group(0) @binding(2) var<storage, read> lights: array<Light>;
 @group(0) @binding(3) var shadow_tex: texture_depth_2d_array;
 @group(0) @binding(4) var scatter_out: texture_storage_3d<rgba16float, write>;
+@group(0) @binding(5) var cascade_tex: texture_depth_2d_array;
+@group(0) @binding(6) var<storage, read> cascades: array<vec4f>;   // per cascade: (centre, radius), (back, far, -, -)
 
 fn hg(c: f32, g: f32) -> f32 {
     let d = 1.0 + g * g - 2.0 * g * c;
     return (1.0 - g * g) / (4.0 * PI * d * sqrt(d));
 }
 
-// Radial distance from the light stored by texel `t` of layer `layer` (reversed-Z depth decoded along the
-// texel-centre ray); empty texels are infinitely far (lit).
+// Distance stored by texel `t` of layer `layer`: spot / point, the radial distance from the light (reversed-Z
+// depth decoded along the texel-centre ray); directional, the distance from the cascade's view plane along the
+// light (orthographic reversed-Z, 1 - z/far). Empty texels are infinitely far (lit).
 fn stored_distance(li: Light, t: vec2i, layer: i32, tan_h: f32) -> f32 {
+    if (li.pos_kind.w == 2.0) {
+        let dc = textureLoad(cascade_tex, t, layer, 0);
+        return select((1.0 - dc) * cascades[2 * layer + 1].y, SKY, dc <= 0.0);
+    }
     let d = textureLoad(shadow_tex, t, layer, 0);
     if (d <= 0.0) {
         return SKY;
@@ -29,17 +36,34 @@ fn stored_distance(li: Light, t: vec2i, layer: i32, tan_h: f32) -> f32 {
 
 // Shadow visibility 1 - strength (1 - lit) of light `li` at x: `shadow.w` 0 = hard (the texel holding the
 // sample), 1 = pcf (2x2 texels around uv res - 1/2, compared, bilinear weights, clamped to the face).
+// Directional lights use the first cascade whose sphere holds x (lit outside every one).
 fn visibility(li: Light, x: vec3f) -> f32 {
     let layer0 = i32(li.shadow.x);
     if (layer0 < 0) {
         return 1.0;
     }
     let res = li.shadow.y;
-    let w = x - li.pos_kind.xyz;
+    var w = x - li.pos_kind.xyz;
+    var d_ref = length(w);
     var layer = layer0;
     var uv: vec2f;
     var tan_h = 1.0;
-    if (li.pos_kind.w == 1.0) {
+    if (li.pos_kind.w == 2.0) {
+        layer = -1;
+        for (var k = layer0; k < layer0 + i32(li.cone.x); k++) {
+            let sphere = cascades[2 * k];
+            w = x - sphere.xyz;
+            if (dot(w, w) <= sphere.w * sphere.w) {
+                uv = vec2f(0.5 + 0.5 * dot(w, li.right_tan.xyz) / sphere.w, 0.5 - 0.5 * dot(w, li.up_bias.xyz) / sphere.w);
+                d_ref = dot(w, li.dir_range.xyz) + cascades[2 * k + 1].x;
+                layer = k;
+                break;
+            }
+        }
+        if (layer < 0) {
+            return 1.0;
+        }
+    } else if (li.pos_kind.w == 1.0) {
         let zl = dot(w, li.dir_range.xyz);
         if (!(zl > 0.0)) {
             return 1.0;
@@ -66,7 +90,6 @@ fn visibility(li: Light, x: vec3f) -> f32 {
         uv = vec2f(0.5 + 0.5 * dot(w, CUBE_RIGHT[f]) / ma, 0.5 - 0.5 * dot(w, CUBE_UP[f]) / ma);
         layer = layer0 + f;
     }
-    let d_ref = length(w);
     let last = vec2i(i32(res) - 1);
     var lit = 0.0;
     if (li.shadow.w == 0.0) {
