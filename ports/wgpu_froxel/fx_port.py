@@ -201,7 +201,8 @@ class Raster(kz_port.KillzonePort):
                                             usage=self.rt_usage)
         if not blocks:
             return
-        module = d.create_shader_module(code=(SHADERS / "cascade.wgsl").read_text())
+        module = d.create_shader_module(code=(KZ / "shaders" / "shadow.wgsl").read_text() + "\n"
+                                        + (SHADERS / "cascade.wgsl").read_text())
         layout = {"array_stride": 36, "step_mode": "vertex", "attributes": [
             {"format": "float32x3", "offset": 0, "shader_location": 0},
             {"format": "float32x3", "offset": 12, "shader_location": 1},
@@ -210,7 +211,7 @@ class Raster(kz_port.KillzonePort):
             layout="auto", vertex={"module": module, "entry_point": "vs_main", "buffers": [layout]},
             primitive={"topology": "triangle-list", "cull_mode": "none"},
             depth_stencil={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"},
-            multisample=None, fragment={"module": module, "entry_point": "fs_main", "targets": []})
+            multisample=None, fragment={"module": module, "entry_point": "fs_ortho", "targets": []})
         vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
         binds = [(self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]), r) for b, r in blocks]
 

@@ -54,7 +54,7 @@ fn visibility(li: Light, x: vec3f) -> f32 {
             let sphere = cascades[2 * k];
             w = x - sphere.xyz;
             if (dot(w, w) <= sphere.w * sphere.w) {
-                uv = vec2f(0.5 + 0.5 * dot(w, li.right_tan.xyz) / sphere.w, 0.5 - 0.5 * dot(w, li.up_bias.xyz) / sphere.w);
+                uv = 0.5 + vec2f(0.5, -0.5) * vec2f(dot(w, li.right_tan.xyz), dot(w, li.up_bias.xyz)) / sphere.w;
                 d_ref = dot(w, li.dir_range.xyz) + cascades[2 * k + 1].x;
                 layer = k;
                 break;
