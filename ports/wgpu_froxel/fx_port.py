@@ -1,8 +1,9 @@
 """The froxel technique (Wronski 2014, Hillaire 2015) as a WebGPU port: WGSL compute shaders driven by wgpu-py.
 
 Written from docs/TECHNIQUES.md (``froxel``), docs/CONVENTIONS.md and docs/PORTING.md §5 as an outside team
-would. The raster passes (reversed-Z depth, shadow maps, deferred scene colour) are the killzone port's
-(``ports/wgpu/kz_port.py``, imported as it is); the froxel passes are compute dispatches on 3-D textures:
+would. The raster passes (reversed-Z depth, spot and cube shadow maps, deferred scene colour) are the killzone
+port's (``ports/wgpu/kz_port.py``, imported as it is), plus the cascaded maps of directional lights
+(:meth:`Raster.render_cascades`); the froxel passes are compute dispatches on 3-D textures:
 
 ====  ===========  =========================================================  ==========================
  #    pass         what                                                       target
