@@ -90,3 +90,23 @@ def test_variant_is_judged_as_expected(sequences, variant):
         failing = {scene: v for scene, v in verdicts.items() if not v[0]}
         assert failing, (variant, verdicts)
         assert max(worst for _, worst, _ in failing.values()) > 2.0, (variant, failing)   # not on a knife edge
+
+
+@pytest.mark.parametrize("scene", list(SCENES))
+def test_first_lit_grid_matches_vlref_render_of_the_scene_and_its_shadows_matter(sequences, scene):
+    """Against the scene, not the port's buffers: frame 0's lit and integrated grids (no history on either side)
+    equal `vlref render`'s, whose depth and shadow maps (spot; the sun's cascades) are vlref's own ray casts, so
+    the port's rasterised maps and their lookup agree with the scene; and the same grid differs from the scene
+    rendered without shadows, so those maps shadow something."""
+    from vlref.render import render
+    from vlref.scene import load_scene
+
+    port, overrides, _, _ = sequences[scene]
+    got = port.run("faithful")[0]
+    want = render(load_scene(scene, overrides), stages=True).buffers
+    for name in ("froxel_scatter", "froxel_integrated"):
+        report = fx_check.compare(want[name], got[name], "gpu-full")
+        assert report.passed and report.metrics["failing_pixels"] == 0, (name, report.checks)
+    unshadowed = render(load_scene(scene, [*overrides, "lights.0.shadows.enabled=false"]), stages=True).buffers
+    report = fx_check.compare(unshadowed["froxel_scatter"], got["froxel_scatter"], "gpu-full")
+    assert min(fx_check.margins(report)) > 3.0, report.checks
