@@ -124,3 +124,27 @@ def test_camera_defaults_to_the_scene_camera(tmp_path):
     port = load_port(manifest)
     cam = camera_from_settings(load_scene("pillars", overrides).camera, 48, 27)
     np.testing.assert_array_equal(port.camera.rotation, cam.rotation)
+
+
+def test_march_sequence_on_exported_frames_reproduces_a_temporal_render_sequence(tmp_path):
+    """A temporal froxel sequence of an animated scene (the spot turns): each frame exported as a port would
+    (``render.frame=F``) and marched in order with the history carried (``march_sequence``; the CLI with several
+    manifests) reproduces ``render --frames``: the manifest's scene is evaluated at its frame, and frame 2's
+    history depends on frames 0 and 1."""
+    from vlref.port import load_port, march_sequence
+    from vlref.sequence import render_sequence
+
+    grid = ("techniques.froxel.grid_width=12", "techniques.froxel.grid_height=8", "techniques.froxel.slices=8",
+            "techniques.froxel.history_clamp=true")
+    overrides = (*SMALL, *grid)
+    want = [r.buffers for _, r in render_sequence(load_scene("anim_spot", overrides), range(3), stages=True)]
+    manifests = [export_port("anim_spot", tmp_path / f"f{f}", (*overrides, f"render.frame={f}")) for f in range(3)]
+    got = list(march_sequence([load_port(m) for m in manifests]))
+    for f in range(3):
+        for name in ("froxel_scatter", "froxel_history", "final"):
+            report = compare_arrays(want[f][name], np.asarray(got[f][name], np.float32), "float32", flip=False)
+            assert report.passed, (f, name, report.summary())
+    assert not np.allclose(got[2]["froxel_history"], got[2]["froxel_scatter"])   # the history is used
+    assert main(["march", *map(str, manifests), "-o", str(tmp_path / "m"), "--stages", "-q"]) == 0
+    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == ["frame_0000", "frame_0001", "frame_0002"]
+    assert (tmp_path / "m" / "frame_0002" / "froxel_history.exr").is_file()

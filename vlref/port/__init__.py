@@ -65,10 +65,10 @@ would write them). The command line is :mod:`vlref.cli.march`.
 from .decode import (CUBE_ORDER, FAR_VALUE, NEAR_VALUE, PortShadowMap, PortTile, camera_from_matrices,
                      decode_depth)
 from .export import export_port, orthographic
-from .frame import march, march_port, port_frame, save_march
+from .frame import march, march_port, march_sequence, port_frame, save_march
 from .manifest import PortBuffers, load_port
 from .shadows import shadow_maps_from_port
 
 __all__ = ["PortTile", "PortShadowMap", "PortBuffers", "load_port", "decode_depth", "camera_from_matrices",
-           "shadow_maps_from_port", "port_frame", "march", "march_port", "save_march", "export_port",
+           "shadow_maps_from_port", "port_frame", "march", "march_sequence", "march_port", "save_march", "export_port",
            "orthographic", "FAR_VALUE", "NEAR_VALUE", "CUBE_ORDER"]

@@ -138,7 +138,7 @@ def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_enco
         for light in range(frame.lights.count):
             if maps.mode(light) in (SHADOW_NONE, SHADOW_EXACT):
                 continue
-            tiles, splits = _light_tiles(scene, cam, maps, light, shadow_encoding, shadow_convention)
+            tiles, splits = _light_tiles(frame.scene, cam, maps, light, shadow_encoding, shadow_convention)
             cols = 3 if len(tiles) == 6 else len(tiles)
             rows = len(tiles) // cols
             res = tiles[0][0].shape[0]

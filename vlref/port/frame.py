@@ -8,7 +8,7 @@ are the port's (normals, albedo and emission are zero: the march reads depth and
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 
@@ -16,7 +16,7 @@ from ..techniques import FRAME_BUFFERS, TECHNIQUES
 from .manifest import PortBuffers, load_port
 from .shadows import shadow_maps_from_port
 
-__all__ = ["port_frame", "march", "march_port", "save_march"]
+__all__ = ["port_frame", "march", "march_sequence", "march_port", "save_march"]
 """Buffers :func:`save_march` writes without ``stages`` (besides ``depth``)."""
 
 
@@ -44,6 +44,21 @@ def march(port: PortBuffers) -> dict[str, np.ndarray]:
     out = TECHNIQUES[port.scene.render.technique].render(port.scene, port_frame(port))
     out["depth"] = port.depth
     return out
+
+
+def march_sequence(ports: Sequence[PortBuffers]) -> Iterator[dict[str, np.ndarray]]:
+    """:func:`march` on each frame of ``ports`` in order, each given the previous frame's temporal state
+    (``froxel`` with ``temporal = true``: the history of :mod:`vlref.froxel.temporal`), as
+    :func:`vlref.sequence.render_sequence` chains vlref's own frames; the first frame starts without history.
+    The state is the technique's ``history`` buffer, removed from what is yielded."""
+    history = None
+    for port in ports:
+        frame = port_frame(port)
+        frame.history = history
+        out = TECHNIQUES[port.scene.render.technique].render(port.scene, frame)
+        history = out.pop("history", None)
+        out["depth"] = port.depth
+        yield out
 
 
 def march_port(path, overrides: Sequence[str] = ()) -> dict[str, np.ndarray]:

@@ -168,10 +168,13 @@ def bundled_name(text: str) -> bool:
 def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
     """Read a port manifest (:class:`PortManifest`) and decode its buffers.
 
-    The scene is loaded with the manifest's ``set`` list, then the depth buffer's size, then ``overrides``.
+    The scene is loaded with the manifest's ``set`` list, then the depth buffer's size, then ``overrides``,
+    and its ``[animation]`` is evaluated at ``render.frame`` (:func:`vlref.scene.animation.scene_at`: the
+    lights and medium of that frame; the camera is the manifest's when it has one).
     """
     from ..io import read_image
     from ..scene import load_scene
+    from ..scene.animation import scene_at
     from ..tomlfile import read_toml
 
     path = Path(path)
@@ -180,8 +183,8 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
     m = build(PortManifest, read_toml(path, "port manifest"), file, base)
     raw_depth = _read_single(m.depth.path)
     h, w = raw_depth.shape
-    scene = load_scene(m.scene if bundled_name(m.scene) else base / m.scene,
-                       [*m.set, f"render.width={w}", f"render.height={h}", *overrides])
+    scene = scene_at(load_scene(m.scene if bundled_name(m.scene) else base / m.scene,
+                                [*m.set, f"render.width={w}", f"render.height={h}", *overrides]))
 
     if m.camera is None:
         camera = camera_from_settings(scene.camera, w, h)

@@ -1,0 +1,45 @@
+"""Switches of the WebGPU froxel port: the faithful port, planted bugs typical of froxel code, benign variants.
+
+Each variant sets WGSL override constants (declared in ``shaders/*.wgsl``) and/or host-side switches;
+``expect`` is what vlref must say about it: ``pass`` (every pass of every frame within its preset, at
+<= 0.5x of every bound) or ``fail`` (some pass of some frame beyond its preset: :mod:`fx_check`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Optional
+
+
+@dataclass(frozen=True)
+class Variant:
+    description: str
+    expect: str                                  # "pass" or "fail"
+    overrides: dict = field(default_factory=dict)
+    depth_distribution: Optional[float] = None   # host: slice law λ (None: the scene's)
+    frozen_jitter: bool = False                  # host: frame 0's Halton point every frame
+    partial_groups: bool = False                 # host: floor(size / 8) workgroups per axis
+
+
+VARIANTS = {
+    "faithful": Variant("the port as the docs describe it (rgba16float grids, hardware trilinear)", "pass"),
+    # benign: must pass at <= 0.5x of every bound
+    "weights8": Variant("history fetch and apply by a trilinear with 8-bit sub-texel weights (a GPU texture "
+                        "unit's precision, written out)", "pass", {"BENIGN_WEIGHTS8": 1}),
+    "optical_depth": Variant("integration: T = exp(-Σ σt Δ) instead of the running product of exp(-σt Δ)", "pass",
+                             {"BENIGN_OPTICAL_DEPTH": 1}),
+    # planted bugs: must fail
+    "lambda_exponential": Variant("slice law read with λ = 1 (purely exponential) instead of the scene's", "fail",
+                                  depth_distribution=1.0),
+    "back_to_front": Variant("integration walks the slices from the far end", "fail", {"BUG_BACK_TO_FRONT": 1}),
+    "half_texel": Variant("apply samples the volume at w = s/D (half-texel offset in the 3-D lookup)", "fail",
+                          {"BUG_HALF_TEXEL": 1}),
+    "current_vp": Variant("reprojection with the current instead of the previous view-projection", "fail",
+                          {"BUG_CURRENT_VP": 1}),
+    "no_clamp": Variant("history clamp missing (the scene asks for it)", "fail", {"BUG_NO_CLAMP": 1}),
+    "frozen_jitter": Variant("the jitter sequence does not advance per frame", "fail", frozen_jitter=True),
+    "partial_group": Variant("dispatch of floor(size/8) groups: the last partial group is not covered", "fail",
+                             partial_groups=True),
+    "no_transmittance_carry": Variant("transmittance not carried across slices (restarts at 1 per slice)", "fail",
+                                      {"BUG_NO_TRANSMITTANCE_CARRY": 1}),
+}
