@@ -8,7 +8,7 @@ act on light through :func:`vlref.geometry.shadow_transmittance`).
 Per pixel with a hit at distance ``t`` on object ``k``: ``distance = t``, ``depth = t dot(d, f)``
 (linear eye depth, the view-space z), ``position = o + t d``, ``normal`` the unit normal facing
 the camera, ``albedo``/``emission`` of object ``k``, ``object_id = k``. Sky pixels: ``depth`` and
-``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange),
+``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange over rows),
 so the buffers are bit-identical for any thread count.
 """
 
@@ -21,6 +21,7 @@ from numba import njit, prange
 
 from ..camera import Camera
 from ..scene.model import Scene
+from .bvh import traversal_stack
 from .scene_geometry import Geometry, build_geometry, closest_hit
 
 __all__ = ["GBuffer", "raycast"]
@@ -49,23 +50,24 @@ def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, 
                     object_id):
     h, w = depth.shape
     ox, oy, oz = origin[0], origin[1], origin[2]
-    for p in prange(h * w):
-        y, x = p // w, p % w
-        dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
-        cos_f = dx * forward[0] + dy * forward[1] + dz * forward[2]
-        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, far / cos_f, True)
-        object_id[y, x] = obj
-        if obj < 0:
-            depth[y, x] = np.inf
-            distance[y, x] = np.inf
-            continue
-        depth[y, x] = t * cos_f
-        distance[y, x] = t
-        position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
-        normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = nx, ny, nz
-        for c in range(3):
-            albedo[y, x, c] = geo.albedo[obj, c]
-            emission[y, x, c] = geo.emission[obj, c]
+    for y in prange(h):
+        stack = traversal_stack()
+        for x in range(w):
+            dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
+            cos_f = dx * forward[0] + dy * forward[1] + dz * forward[2]
+            t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, far / cos_f, True, stack)
+            object_id[y, x] = obj
+            if obj < 0:
+                depth[y, x] = np.inf
+                distance[y, x] = np.inf
+                continue
+            depth[y, x] = t * cos_f
+            distance[y, x] = t
+            position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
+            normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = nx, ny, nz
+            for c in range(3):
+                albedo[y, x, c] = geo.albedo[obj, c]
+                emission[y, x, c] = geo.emission[obj, c]
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,

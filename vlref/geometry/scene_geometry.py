@@ -48,14 +48,14 @@ import numpy as np
 from numba import njit, prange
 
 from ..scene.model import Box, Mesh, Plane, Scene, Sphere
-from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance
+from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance, traversal_stack
 from .prim_bvh import build_primitive_bvh, prims_closest, prims_occluded
 from .obj import load_obj, transform_vertices
 from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
                          pack_plane, pack_sphere, triangle_normal)
 
 __all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance",
-           "trace_distances", "SHADOW_EPS"]
+           "trace_distances", "SHADOW_EPS", "RAY_CHUNK"]
 
 SHADOW_EPS = 1e-6
 """Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
@@ -177,11 +177,12 @@ def build_geometry(scene: Scene) -> Geometry:
 
 
 @njit(cache=True, fastmath=False)
-def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
+def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack=None):
     """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
 
     ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
-    ray origin (``dot(n, d) <= 0``).
+    ray origin (``dot(n, d) <= 0``). ``stack``: the traversals' scratch
+    (:func:`~vlref.geometry.bvh.traversal_stack`; allocated here when ``None``).
     """
     # geo fields are bound to locals outside the loops: a namedtuple field read inside a loop costs
     # reference-count traffic on every iteration (measured: ~200 ns per ray in BENCHMARKS.md)
@@ -195,12 +196,14 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
         if t < best:
             best, best_k, nx, ny, nz = t, k, ax, ay, az
     ray = (ox, oy, oz, dx, dy, dz)
+    if stack is None:
+        stack = traversal_stack()
     best, best_k, nx, ny, nz = prims_closest(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count,
                                              geo.pnode_prims, geo.prim_kind, geo.prim_row, ray, tmin, tmax, best,
-                                             best_k, nx, ny, nz)
+                                             best_k, nx, ny, nz, stack)
     obj = geo.prim_obj[best_k] if best_k >= 0 else -1
     t, i = bvh_closest(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2,
-                       geo.tri_opaque, opaque_only, ray, tmin, best)
+                       geo.tri_opaque, opaque_only, ray, tmin, best, stack)
     if i >= 0:
         best, obj = t, geo.tri_obj[i]
         nx, ny, nz = triangle_normal(geo.e1, geo.e2, i)
@@ -212,19 +215,22 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
 
 
 @njit(cache=True, fastmath=False)
-def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
+def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack=None):
     """RGB transmittance of the segment ``o + t d``, ``t`` in ``(SHADOW_EPS / |d|, tmax)``.
 
     0 when an opaque surface (``opacity == 1``) lies on it (any-hit early exit), else
     ``prod (1 - opacity_k) * tint_k`` over the transparent surface crossings ``k`` (module docstring).
+    ``stack`` as :func:`closest_hit`'s.
     """
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm == 0.0:
         return 1.0, 1.0, 1.0
     tmin = SHADOW_EPS / norm
     ray = (ox, oy, oz, dx, dy, dz)
+    if stack is None:
+        stack = traversal_stack()
     if prims_occluded(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims,
-                      geo.prim_kind, geo.prim_row, ray, tmin, tmax):
+                      geo.prim_kind, geo.prim_row, ray, tmin, tmax, stack):
         return 0.0, 0.0, 0.0
     lin, kind, row, prim_obj, opacity, tint = (geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity,
                                                geo.tint)
@@ -244,17 +250,24 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
             tg *= clear * tint[o, 1]
             tb *= clear * tint[o, 2]
     mr, mg, mb = bvh_transmittance(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1,
-                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax)
+                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax, stack)
     return tr * mr, tg * mg, tb * mb
+
+
+RAY_CHUNK = 256
+"""Rays per parallel iteration of the many-ray kernels (one traversal stack each)."""
 
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _trace_kernel(geo, origins, dirs, tmax, opaque_only, t_out, obj_out):
-    for r in prange(origins.shape[0]):
-        t, obj, _nx, _ny, _nz = closest_hit(geo, origins[r, 0], origins[r, 1], origins[r, 2],
-                                            dirs[r, 0], dirs[r, 1], dirs[r, 2], 0.0, tmax[r], opaque_only)
-        t_out[r] = t
-        obj_out[r] = obj
+    n = origins.shape[0]
+    for c in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        stack = traversal_stack()
+        for r in range(c * RAY_CHUNK, min(n, (c + 1) * RAY_CHUNK)):
+            t, obj, _nx, _ny, _nz = closest_hit(geo, origins[r, 0], origins[r, 1], origins[r, 2],
+                                                dirs[r, 0], dirs[r, 1], dirs[r, 2], 0.0, tmax[r], opaque_only, stack)
+            t_out[r] = t
+            obj_out[r] = obj
 
 
 def trace_distances(geo: GeoArrays, origins, dirs, tmax, opaque_only: bool = True):

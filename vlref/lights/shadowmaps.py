@@ -52,7 +52,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
-from ..geometry import closest_hit, shadow_transmittance
+from ..geometry import RAY_CHUNK, closest_hit, shadow_transmittance, traversal_stack
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
@@ -209,24 +209,27 @@ def cascade_sphere(camera: Camera, z0: float, z1: float) -> tuple[np.ndarray, fl
 @njit(cache=True, fastmath=False, parallel=True)
 def _cast_map(geo, origins, dirs, start, tmax, bias, slope_bias, want_tint, out, tint):
     """Per ray: biased distance ``start + t`` to the first opaque hit (inf if none before ``tmax``)."""
-    for k in prange(origins.shape[0]):
-        ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
-        dx, dy, dz = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, tmax[k], True)
-        if obj < 0:
-            out[k] = np.inf
-        else:
-            c = abs(nx * dx + ny * dy + nz * dz)
-            slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
-            out[k] = start[k] + t + bias + slope_bias * slope
-        if want_tint:
-            end = min(t, tmax[k])
-            tt, tobj, _nx, _ny, _nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, end, False)
-            if tobj < 0:
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+    n = origins.shape[0]
+    for chunk in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        stack = traversal_stack()
+        for k in range(chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)):
+            ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
+            dx, dy, dz = dirs[k, 0], dirs[k, 1], dirs[k, 2]
+            t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, tmax[k], True, stack)
+            if obj < 0:
+                out[k] = np.inf
             else:
-                r, g, b = shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, end * (1.0 - 1e-9))
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
+                c = abs(nx * dx + ny * dy + nz * dz)
+                slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
+                out[k] = start[k] + t + bias + slope_bias * slope
+            if want_tint:
+                end = min(t, tmax[k])
+                tt, tobj, _nx, _ny, _nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, end, False, stack)
+                if tobj < 0:
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+                else:
+                    r, g, b = shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, end * (1.0 - 1e-9), stack)
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
 
 
 def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
