@@ -12,6 +12,8 @@ from .progress_bar import StageBar
 HELP = "render a scene"
 MAIN_BUFFERS = ("final", "depth", "inscatter", "transmittance")
 """Buffers ``vlref render`` writes without ``--stages`` (EXR), besides final.png."""
+LIGHT_BUFFERS = ("final", "inscatter", "transmittance")
+"""The buffers ``--half-float`` stores as half floats (depth and the stage buffers stay float32)."""
 
 
 def parser() -> argparse.ArgumentParser:
@@ -22,6 +24,9 @@ def parser() -> argparse.ArgumentParser:
                    help=f"technique ({technique_names()}); shortcut for --set render.technique=NAME "
                         "(default: the scene's render.technique, physical when unset)")
     p.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map (default: off)")
+    p.add_argument("--half-float", action="store_true",
+                   help=f"store the light buffers ({', '.join(LIGHT_BUFFERS)}) as half-float EXR: half the bytes, "
+                        "11 significant bits, values above 65504 become inf (default: off, float32)")
     p.add_argument("--frames", metavar="A:B", help="render frames A..B-1 of the scene's [animation] as numbered "
                    "EXR sequences (<buffer>.NNNN.exr) plus preview.gif (and preview.mp4 with vlref[video]) "
                    "(default: one frame, render.frame)")
@@ -48,7 +53,8 @@ def run(args) -> int:
         result = render(scene, stages=args.stages, progress=stage)
         exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
         with output_dir(args.output) as out:
-            save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
+            save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta,
+                        half=LIGHT_BUFFERS if args.half_float else ())
     if not args.quiet:
         for note in result.notes:
             print(f"vlref: note: {note}", file=sys.stderr)
