@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names
@@ -34,27 +35,36 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def run(args) -> int:
+def render_to_folder(scene, output, stages: bool = False, half_float: bool = False, quiet: bool = True):
+    """What ``vlref render`` does with one frame: render ``scene``, write its buffers and preview into ``output``
+    (all or nothing). Returns ``(result, phrase, write_seconds)``: the render, the preview-exposure phrase and
+    the time from the end of the render to the files in place (exposure, EXR, PNG)."""
     from ..io import output_dir, save_render
     from ..render import render
     from ..warmup import march_ahead
 
-    scene = load_scene_checked(args)
-    if args.frames is not None:
-        return _render_frames(args, scene)
     # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
-    with StageBar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+    with StageBar(quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
         def stage(name: str) -> None:
             if name == "shadow maps":  # built (part of the volumetric stage): the march comes next
                 march_ready()
             else:
                 bar.stage(name)
 
-        result = render(scene, stages=args.stages, progress=stage)
+        result = render(scene, stages=stages, progress=stage)
+        start = time.perf_counter()
         exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
-        with output_dir(args.output) as out:
-            save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta,
-                        half=LIGHT_BUFFERS if args.half_float else ())
+        with output_dir(output) as out:
+            save_render(out, result, stages=stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta,
+                        half=LIGHT_BUFFERS if half_float else ())
+    return result, phrase, time.perf_counter() - start
+
+
+def run(args) -> int:
+    scene = load_scene_checked(args)
+    if args.frames is not None:
+        return _render_frames(args, scene)
+    result, phrase, _ = render_to_folder(scene, args.output, args.stages, args.half_float, args.quiet)
     if not args.quiet:
         for note in result.notes:
             print(f"vlref: note: {note}", file=sys.stderr)
