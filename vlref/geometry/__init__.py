@@ -11,8 +11,8 @@
 from .bvh import Bvh, build_bvh, traversal_stack
 from .obj import load_obj, transform_vertices, write_obj
 from .raycast import GBuffer, raycast
-from .scene_geometry import (RAY_CHUNK, SHADOW_EPS, GeoArrays, Geometry, build_geometry, closest_hit,
+from .scene_geometry import (RAY_CHUNK, SHADOW_EPS, GeoArrays, Geometry, build_geometry, closest_hit, closest_hits,
                              shadow_transmittance, trace_distances)
 
 __all__ = ["Bvh", "build_bvh", "traversal_stack", "RAY_CHUNK", "load_obj", "transform_vertices", "write_obj", "GBuffer", "raycast", "SHADOW_EPS",
-           "GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance", "trace_distances"]
+           "GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance", "trace_distances"]

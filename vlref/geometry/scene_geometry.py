@@ -54,7 +54,7 @@ from .obj import load_obj, transform_vertices
 from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
                          pack_plane, pack_sphere, triangle_normal)
 
-__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance",
+__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance",
            "trace_distances", "SHADOW_EPS", "RAY_CHUNK"]
 
 SHADOW_EPS = 1e-6
@@ -177,16 +177,10 @@ def build_geometry(scene: Scene) -> Geometry:
 
 
 @njit(cache=True, fastmath=False)
-def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack=None):
-    """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
-
-    ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
-    ray origin (``dot(n, d) <= 0``). ``stack``: the traversals' scratch
-    (:func:`~vlref.geometry.bvh.traversal_stack`; allocated here when ``None``).
-    """
-    # geo fields are bound to locals outside the loops: a namedtuple field read inside a loop costs
-    # reference-count traffic on every iteration (measured: ~200 ns per ray in BENCHMARKS.md)
-    lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
+def _closest(lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims,
+             node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
+             ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack):
+    """:func:`closest_hit` on the geo tuple's arrays (the fields of the same names)."""
     best, best_k, nx, ny, nz = tmax, -1, 0.0, 0.0, 0.0
     for j in range(lin.shape[0]):
         k = lin[j]
@@ -196,22 +190,57 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack=None
         if t < best:
             best, best_k, nx, ny, nz = t, k, ax, ay, az
     ray = (ox, oy, oz, dx, dy, dz)
-    if stack is None:
-        stack = traversal_stack()
-    best, best_k, nx, ny, nz = prims_closest(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count,
-                                             geo.pnode_prims, geo.prim_kind, geo.prim_row, ray, tmin, tmax, best,
-                                             best_k, nx, ny, nz, stack)
-    obj = geo.prim_obj[best_k] if best_k >= 0 else -1
-    t, i = bvh_closest(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2,
-                       geo.tri_opaque, opaque_only, ray, tmin, best, stack)
+    best, best_k, nx, ny, nz = prims_closest(pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims, kind, row,
+                                             ray, tmin, tmax, best, best_k, nx, ny, nz, stack)
+    obj = prim_obj[best_k] if best_k >= 0 else -1
+    t, i = bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, opaque_only, ray, tmin,
+                       best, stack)
     if i >= 0:
-        best, obj = t, geo.tri_obj[i]
-        nx, ny, nz = triangle_normal(geo.e1, geo.e2, i)
+        best, obj = t, tri_obj[i]
+        nx, ny, nz = triangle_normal(e1, e2, i)
     if obj < 0:
         return INF, -1, 0.0, 0.0, 0.0
     if nx * dx + ny * dy + nz * dz > 0.0:
         nx, ny, nz = -nx, -ny, -nz
     return best, obj, nx, ny, nz
+
+
+@njit(cache=True, fastmath=False)
+def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack=None):
+    """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
+
+    ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
+    ray origin (``dot(n, d) <= 0``). ``stack``: the traversals' scratch
+    (:func:`~vlref.geometry.bvh.traversal_stack`; allocated here when ``None``). Many rays: :func:`closest_hits`.
+    """
+    if stack is None:
+        stack = traversal_stack()
+    return _closest(geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity, geo.pnode_min,
+                    geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims, geo.node_min, geo.node_max,
+                    geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2, geo.tri_opaque, geo.tri_obj,
+                    ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack)
+
+
+@njit(cache=True, fastmath=False)
+def closest_hits(geo, origins, dirs, tmax, opaque_only, stack, t_out, obj_out, normal_out):
+    """:func:`closest_hit` of rays ``i`` (``origins[i]``, ``dirs[i]``, ``t`` in ``(0, tmax[i])``) into ``t_out``,
+    ``obj_out`` and ``normal_out`` (N, 3), the same bits ray by ray.
+
+    The geo tuple's fields are read once for all the rays: a field read costs reference-count traffic
+    (atomic, shared by every thread), measured at ~200 ns of a ray's ~350 ns on one thread (BENCHMARKS.md,
+    "Whole frame"). Kernels call it on a row or chunk of rays with a row or chunk of scratch.
+    """
+    lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
+    pnode_min, pnode_max, pnode_first = geo.pnode_min, geo.pnode_max, geo.pnode_first
+    pnode_count, pnode_prims = geo.pnode_count, geo.pnode_prims
+    node_min, node_max, node_first, node_count = geo.node_min, geo.node_max, geo.node_first, geo.node_count
+    v0, e1, e2, tri_opaque, tri_obj = geo.v0, geo.e1, geo.e2, geo.tri_opaque, geo.tri_obj
+    for i in range(origins.shape[0]):
+        t_out[i], obj_out[i], normal_out[i, 0], normal_out[i, 1], normal_out[i, 2] = _closest(
+            lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims,
+            node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
+            origins[i, 0], origins[i, 1], origins[i, 2], dirs[i, 0], dirs[i, 1], dirs[i, 2], 0.0, tmax[i],
+            opaque_only, stack)
 
 
 @njit(cache=True, fastmath=False)
@@ -262,12 +291,10 @@ RAY_CHUNK = 256
 def _trace_kernel(geo, origins, dirs, tmax, opaque_only, t_out, obj_out):
     n = origins.shape[0]
     for c in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
-        stack = traversal_stack()
-        for r in range(c * RAY_CHUNK, min(n, (c + 1) * RAY_CHUNK)):
-            t, obj, _nx, _ny, _nz = closest_hit(geo, origins[r, 0], origins[r, 1], origins[r, 2],
-                                                dirs[r, 0], dirs[r, 1], dirs[r, 2], 0.0, tmax[r], opaque_only, stack)
-            t_out[r] = t
-            obj_out[r] = obj
+        s, e = c * RAY_CHUNK, min(n, (c + 1) * RAY_CHUNK)
+        normal = np.empty((e - s, 3))
+        closest_hits(geo, origins[s:e], dirs[s:e], tmax[s:e], opaque_only, traversal_stack(), t_out[s:e],
+                     obj_out[s:e], normal)
 
 
 def trace_distances(geo: GeoArrays, origins, dirs, tmax, opaque_only: bool = True):

@@ -52,7 +52,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
-from ..geometry import RAY_CHUNK, closest_hit, shadow_transmittance, traversal_stack
+from ..geometry import RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
@@ -248,24 +248,34 @@ def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
     none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour."""
     n = res * res
     for chunk in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        s, e = chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)
+        m = e - s
+        origins, dirs, start, tmax = np.empty((m, 3)), np.empty((m, 3)), np.empty(m), np.empty(m)
+        for j in range(m):
+            (origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0], dirs[j, 1], dirs[j, 2], start[j],
+             tmax[j]) = _face_ray(face, ortho, res, s + j)
         stack = traversal_stack()
-        for k in range(chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)):
-            ox, oy, oz, dx, dy, dz, start, tmax = _face_ray(face, ortho, res, k)
-            t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, tmax, True, stack)
-            if obj < 0:
-                out[k] = np.inf
+        t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
+        closest_hits(geo, origins, dirs, tmax, True, stack, t, obj, normal)
+        for j in range(m):
+            if obj[j] < 0:
+                out[s + j] = np.inf
             else:
-                c = abs(nx * dx + ny * dy + nz * dz)
+                c = abs(normal[j, 0] * dirs[j, 0] + normal[j, 1] * dirs[j, 1] + normal[j, 2] * dirs[j, 2])
                 slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
-                out[k] = start + t + bias + slope_bias * slope
-            if want_tint:
-                end = min(t, tmax)
-                tt, tobj, _nx, _ny, _nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, end, False, stack)
-                if tobj < 0:
+                out[s + j] = start[j] + t[j] + bias + slope_bias * slope
+        if want_tint:
+            end = np.minimum(t, tmax)
+            tt, tobj = np.empty(m), np.empty(m, dtype=np.int64)
+            closest_hits(geo, origins, dirs, end, False, stack, tt, tobj, normal)
+            for j in range(m):
+                k = s + j
+                if tobj[j] < 0:
                     tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
                 else:
-                    r, g, b = shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, end * (1.0 - 1e-9), stack)
-                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start + tt + bias, r, g, b
+                    r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
+                                                   dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
 
 
 def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
