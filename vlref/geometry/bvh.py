@@ -244,8 +244,8 @@ def traversal_stack():
     """Scratch of one traversal: ``(nodes, entries)``, ``STACK`` node indices (int64) and entry distances.
 
     The queries take it as their optional last argument (``None``: they allocate their own). Kernels
-    allocate one per row or chunk of rays and pass it to every query: an allocation per ray, with its
-    reference counts, took most of a ray's time on 16 threads (BENCHMARKS.md, "Whole frame").
+    allocate one per row or chunk of rays and pass it to every query, where a closest hit used to allocate
+    four arrays per ray (on the device that was 6 % of the G-buffer's time; BENCHMARKS.md, "Whole frame").
     """
     return np.empty(STACK, dtype=np.int64), np.empty(STACK)
 

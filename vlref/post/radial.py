@@ -170,7 +170,8 @@ def _radial_rows(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay,
 
 def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float, weight: float, tap_scale: float,
                  decay: float, address: str, exposure: float = 1.0, visibility: float = 1.0) -> np.ndarray:
-    """``(C * exposure) * visibility``, ``C = tex(u) + sum_{i=1..iterations} tex(u - i delta) * ((dec_i * tap_scale) * weight)``.
+    """``(C * exposure) * visibility`` with
+    ``C = tex(u) + sum_{i=1..iterations} tex(u - i delta) * ((dec_i * tap_scale) * weight)``.
 
     ``delta = (u - l) * (1/divisor * density)``, ``u`` stepped by repeated subtraction, as the shaders do.
     """
