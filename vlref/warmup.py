@@ -7,7 +7,7 @@ milliseconds. The first render after an install therefore pays for compiling the
 each technique and precision (two frames of an animated scene for ``froxel``'s temporal pass) and
 solving a tiny reference:
 
-1. ``frame``: geometry, BVH build, G-buffer ray cast, surface shading, shadow maps and the PNG preview (every later
+1. ``frame``: geometry, BVH build, G-buffer ray cast, surface shading and shadow maps (every later
    task needs a frame, so this one runs first, alone);
 2. then, in ``jobs`` worker processes at once (compiling is single-threaded, so a 2-core machine
    compiles two groups at a time): each technique's passes (``physical`` in float64 and float32) and
@@ -74,10 +74,8 @@ def run_task(name: str) -> tuple[str, float]:
     try:
         scene = load_scene(scene_name, TINY + overrides)
         if what == "frame":
-            from .io import srgb8
             from .render import prepare_frame
             prepare_frame(scene).shadow_maps()
-            srgb8(np.zeros((1, 1, 3)))  # the PNG preview's kernel (every vlref render writes one)
         elif what == "sequence":
             from .sequence import render_sequence
             for _ in render_sequence(scene, range(2)):
