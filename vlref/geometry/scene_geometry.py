@@ -31,7 +31,8 @@ Queries (``t`` in units of ``|d|``; intervals are open):
   transparent occluders. Every surface *crossing* counts: a ray through a closed transparent
   solid (sphere, box, cylinder, closed mesh) is attenuated twice, once entering and once leaving,
   as a pane of glass per surface.
-* :func:`trace_distances` -- many rays at once, parallel over rays (shadow maps).
+* :func:`closest_hits` -- a row or chunk of rays in one call (the G-buffer and shadow-map kernels);
+  :func:`trace_distances` -- many rays at once, parallel over chunks of rays.
 
 Both queries give the same bits as a linear scan of the primitives in scene order followed by the
 triangle BVH (ties between primitives go to the lower index; :mod:`vlref.geometry.prim_bvh`).
