@@ -49,7 +49,9 @@ def test_every_section_with_finite_positive_figures(report):
     assert all(runs["1"]["efficiency"] == 1.0 and runs["1"]["exp_per_s"] > 0 for runs in ceiling.values())
     assert report["first_render"]["warm"]["render_s"] > 0
     assert report["memory"]["subprocess_maxrss_bytes"] > report["memory"]["tracemalloc_peak_bytes"] > 0
-    assert len(report["targets"]) == 7 and all(isinstance(t["met"], bool) for t in report["targets"])
+    whole = report["whole_render"]
+    assert whole["seconds"] > whole["split"]["write"] > 0 and whole["split"]["volumetrics"] > 0
+    assert len(report["targets"]) == 12 and all(isinstance(t["met"], bool) for t in report["targets"])
 
 
 def test_the_machine_ceiling_kernels_compute_their_chains():

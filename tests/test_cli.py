@@ -47,6 +47,15 @@ def test_render_is_deterministic(tmp_path):
     assert a == b
 
 
+def test_half_float_stores_the_light_buffers_as_half(tmp_path):
+    assert main(["render", "pillars", "-o", str(tmp_path / "f"), "-q", *SMALL]) == 0
+    assert main(["render", "pillars", "-o", str(tmp_path / "h"), "-q", "--half-float", *SMALL]) == 0
+    for name in ("final", "inscatter", "transmittance"):
+        full = read_image(tmp_path / "f" / f"{name}.exr")
+        assert np.array_equal(read_image(tmp_path / "h" / f"{name}.exr"), full.astype(np.float16).astype(np.float32))
+    assert (tmp_path / "h" / "depth.exr").read_bytes() == (tmp_path / "f" / "depth.exr").read_bytes()
+
+
 def test_stages_write_shadow_maps_and_pass_buffers(tmp_path):
     out = tmp_path / "s"
     assert main(["render", "pillars", "-o", str(out), "-q", "--stages", *SMALL]) == 0

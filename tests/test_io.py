@@ -320,3 +320,48 @@ def test_save_buffers_and_save_render(tmp_path):
     written = vio.save_render(out, result, stages=False, main=("final", "depth", "inscatter"), exposure=1.0)
     assert sorted(p.name for p in written) == ["depth.exr", "final.exr", "final.png"]
     assert vio.read_exr(out / "final.exr")[1]["technique"] == "physical"
+
+
+def test_half_float_buffers_round_trip_to_the_nearest_half(tmp_path):
+    rng = np.random.default_rng(5)
+    final = rng.random((5, 7, 3)) * 10.0
+    final[0, 0] = (70000.0, -1e-9, 6e-8)  # beyond half's range -> inf; a negative underflow; a subnormal
+    result = types.SimpleNamespace(buffers={"final": final, "depth": rng.random((5, 7)) * 100.0},
+                                   metadata={"technique": "physical"})
+    vio.save_render(tmp_path, result, stages=False, main=("final", "depth"), half=("final",))
+    channels, meta = vio.read_exr(tmp_path / "final.exr")
+    assert meta["technique"] == "physical" and channels["R"].dtype == np.float32
+    with np.errstate(over="ignore"):
+        want = final.astype(np.float32).astype(np.float16).astype(np.float32)
+    assert np.array_equal(vio.read_image(tmp_path / "final.exr"), want)
+    assert vio.read_image(tmp_path / "final.exr")[0, 0, 0] == np.inf
+    # depth was not asked for: float32, bit for bit; half files are smaller
+    np.testing.assert_array_equal(vio.read_image(tmp_path / "depth.exr")[:, :, 0],
+                                  result.buffers["depth"].astype(np.float32))
+    with OpenEXR.File(str(tmp_path / "final.exr")) as f:
+        assert f.channels()["RGB"].pixels.dtype == np.float16
+    with pytest.raises(ValueError, match="stay float32"):
+        vio.save_buffers(tmp_path, {"object_id": np.zeros((2, 2), np.int32)}, half=("object_id",))
+
+
+def test_exr_writer_uses_a_thread_per_core():
+    vio._openexr()  # the pool is sized on first use
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    assert OpenEXR.global_thread_count() == cores
+
+
+def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
+    # the preview runs in bands of rows on threads: the codes must be those of the whole array at once, at and
+    # around every half code (the values that round half way)
+    rng = np.random.default_rng(2)
+    s = (np.arange(255) + 0.5) / 255.0
+    y = np.where(s <= 12.92 * 0.0031308, s / 12.92, ((s + 0.055) / 1.055) ** 2.4)  # sRGB OETF inverted
+    a, b = 2.51 - 2.43 * y, 0.03 - 0.59 * y  # ACES fit inverted: a x^2 + b x - 0.14 y = 0
+    x = (-b + np.sqrt(b * b + 4.0 * a * 0.14 * y)) / (2.0 * a)
+    special = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e7]
+    v = np.concatenate([np.tile(np.concatenate([x, np.nextafter(x, 0.0), np.nextafter(x, 9.0), special]), 40),
+                        rng.random(3 * 517 * 301 - 40 * (3 * 255 + 6)) * 8.0]).reshape(517, 301, 3)
+    assert v.size // vio._SRGB_BAND >= 2  # several bands
+    for exposure in (1.0, 0.37):
+        assert np.array_equal(vio.srgb8(v, exposure), vio._srgb8_values(v, exposure))
+    assert np.array_equal(vio.srgb8(v[:2, :2]), vio._srgb8_values(v[:2, :2], 1.0))

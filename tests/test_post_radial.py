@@ -62,6 +62,37 @@ def test_radial_loop_matches_closed_form(case, light, n, density, weight, decay)
             assert out[r, c] == pytest.approx(C * exposure, rel=1e-9, abs=1e-12)
 
 
+def listing_13_1(img, light, divisor, iterations, density, weight, tap_scale, decay, address):
+    """The shader loop pixel by pixel in Python floats: ``u -= delta`` by repeated subtraction, ``acc += tex * w``."""
+    H, W = img.shape[:2]
+    out = np.zeros(img.shape)
+    scale = 1.0 / divisor * density
+    for r in range(H):
+        for c in range(W):
+            u, v = (c + 0.5) / W, (r + 0.5) / H
+            du, dv = (u - light[0]) * scale, (v - light[1]) * scale
+            acc = 0.0 + tex(img, u, v, address) * 1.0
+            dec = 1.0
+            for _ in range(iterations):
+                u, v = u - du, v - dv
+                acc = acc + tex(img, u, v, address) * (dec * tap_scale * weight)
+                dec = dec * decay
+            out[r, c] = acc
+    return out
+
+
+@pytest.mark.parametrize("address", ["clamp", "repeat", "border"])
+@pytest.mark.parametrize("light", [(0.3, 0.6), (-0.7, 1.9), (2.5, -1.2)])
+def test_radial_same_bits_as_the_pixel_loop(address, light):
+    # the kernel runs taps outer, pixels inner over a row: per pixel the same operations in the same order
+    rng = np.random.default_rng(11)
+    for img in (image(rng, 7, 9, 3), image(rng, 6, 5)):
+        got = disenone_scatter(img, light, 0.9, 0.6, 0.97, num_samples=12, iterations=11, address=address)
+        assert np.array_equal(got, listing_13_1(img, light, 12, 11, 0.9, 0.6, 0.03125, 0.97, address))
+        got = radial_blur(img, light, 10, 0.8, 0.5, 0.95, 0.37, address, visibility=0.5)
+        assert np.array_equal(got, (listing_13_1(img, light, 10, 10, 0.8, 0.5, 1.0, 0.95, address) * 0.37) * 0.5)
+
+
 def test_radial_density_one_ends_on_the_light():
     # with Density = 1 the n-th tap sits on the light: a delta-like image at the light's texel
     # reaches every pixel with weight Decay^(n-1) * Weight

@@ -115,3 +115,25 @@ def test_transparent_occluder_colours_the_light_in_maps_and_exact_rays():
         bufs = sm.buffers()
         assert bufs["shadow_spot_0_transmittance"].shape == (256, 256, 3)
         assert np.isfinite(bufs["shadow_spot_0_transparent_distance"]).any()
+
+
+@pytest.mark.parametrize("ortho", [False, True])
+def test_face_rays_are_the_texel_grid_construction(ortho):
+    # the kernel builds each texel's ray itself; the bits are those of the array construction from texel_grid
+    from vlref.lights.shadowmaps import _face, _face_ray, texel_grid
+
+    res, near, limit, scale = 5, 0.7, 12.0, 0.83
+    origin, fwd = np.array([0.3, 2.0, -1.1]), np.array([0.48, -0.8, 0.36])
+    right, up = np.array([0.6, 0.0, -0.8]), np.array([-0.64, -0.6, -0.48])
+    x, y = texel_grid(res)
+    if ortho:
+        o = origin + (x * scale)[:, None] * right + (y * scale)[:, None] * up - near * fwd
+        d, start, tmax = np.broadcast_to(fwd, o.shape), np.zeros(len(o)), np.full(len(o), limit)
+    else:
+        v = fwd[None, :] + (x * scale)[:, None] * right[None, :] + (y * scale)[:, None] * up[None, :]
+        length = np.linalg.norm(v, axis=1)
+        o, d, start = origin[None, :] + near * v, v / length[:, None], near * length
+        tmax = np.maximum(limit - start, 0.0)
+    face = _face(origin, fwd, right, up, scale, near, limit)
+    got = np.array([_face_ray(face, ortho, res, k) for k in range(res * res)])
+    assert np.array_equal(got, np.column_stack([o, d, start, tmax]))

@@ -15,7 +15,7 @@ from ..scene.model import (Box, CameraSettings, Cylinder, HeightFog, Light, Medi
 __all__ = ["SECTIONS", "THREADS", "BenchConfig", "FULL", "QUICK", "bench_scene", "median_time"]
 
 SECTIONS = ("machine", "march", "baseline", "scaling", "raycast", "shadow_maps", "post", "reference",
-            "first_render", "memory", "targets")
+            "first_render", "whole_render", "memory", "targets")
 THREADS = (1, 2, 4, 8, 16)
 
 

@@ -15,7 +15,7 @@ import numba
 
 from .config import BenchConfig, bench_scene
 
-__all__ = ["bench_reference", "bench_first_render", "bench_memory"]
+__all__ = ["bench_reference", "bench_first_render", "bench_memory", "bench_whole_render"]
 
 
 def bench_reference(cfg: BenchConfig) -> dict:
@@ -69,6 +69,42 @@ def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: 
     report = json.loads(proc.stdout.strip().splitlines()[-1])
     report["process_s"] = wall
     return report
+
+
+_WHOLE = """
+import json, sys, tempfile, time
+t0 = time.perf_counter()
+from vlref.bench import bench_scene
+from vlref.cli.render import render_to_folder
+t1 = time.perf_counter()
+with tempfile.TemporaryDirectory() as folder:
+    result, _, write_s, _ = render_to_folder(bench_scene({w}, {h}, {steps}, "four", {res}), folder + "/out")
+t2 = time.perf_counter()
+print(json.dumps({{"import_s": t1 - t0, "stages": result.timings, "write_s": write_s, "in_process_s": t2 - t0}}))
+"""
+
+
+def bench_whole_render(cfg: BenchConfig) -> dict:
+    """``vlref render`` of (b) at ``cfg.width x cfg.height`` in a fresh process with this process's (warm) Numba
+    cache, as the command does it (:func:`vlref.cli.render.render_to_folder`: render, preview exposure, EXR
+    buffers and PNG into a folder): process wall time and its split (interpreter start and imports, each
+    render stage, writing)."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(Path(__file__).resolve().parents[2]),
+                                                    env.get("PYTHONPATH")) if p)
+    code = _WHOLE.format(w=cfg.width, h=cfg.height, steps=cfg.steps, res=cfg.shadow_resolution)
+    runs = []
+    for _ in range(max(1, cfg.repeats)):
+        start = time.perf_counter()
+        proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+        report = json.loads(proc.stdout.strip().splitlines()[-1])
+        report["process_s"] = time.perf_counter() - start
+        runs.append(report)
+    best = sorted(runs, key=lambda r: r["process_s"])[len(runs) // 2]
+    split = {"start_and_import": best["import_s"], **best["stages"], "write": best["write_s"],
+             "exit": best["process_s"] - best["in_process_s"]}
+    return {"width": cfg.width, "height": cfg.height, "steps": cfg.steps, "lights": 4, "seconds": best["process_s"],
+            "split": split, "what": "fresh process, warm cache: render (b) and write its default outputs"}
 
 
 def bench_first_render(cfg: BenchConfig) -> dict:

@@ -14,7 +14,7 @@ import numpy as np
 
 from .config import BenchConfig
 from .march import bench_baseline, bench_march, bench_scaling
-from .renders import bench_first_render, bench_memory, bench_reference
+from .renders import bench_first_render, bench_memory, bench_reference, bench_whole_render
 from .stages import bench_geometry, bench_post
 
 __all__ = ["targets", "machine_info", "run_bench", "format_report"]
@@ -35,6 +35,7 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
     top = str(max(int(n) for n in scaling))
     per_core = scaling["1"]["samples_per_s"]
     ref = r["reference"]
+    whole = r["whole_render"]
     return [
         _target("march samples/s per core (one spot, float64, 1 thread)", per_core, 100e6, "samples/s", "higher"),
         _target(f"parallel efficiency at {top} threads", scaling[top]["efficiency"], 0.85, "", "higher",
@@ -48,6 +49,15 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
                 "s", note="target is on 16 cores"),
         _target(f"peak memory, {cfg.width}x{cfg.height}, four shadowed lights (subprocess maxrss)",
                 r["memory"]["subprocess_maxrss_bytes"] / 2**30, 1.0, "GiB"),
+        _target(f"vlref render {cfg.width}x{cfg.height} x {cfg.steps}, four shadowed lights, fresh process, warm cache",
+                whole["seconds"], 1.5, "s", note="target is on 16 cores"),
+        _target("writing the default outputs (EXR buffers, PNG preview)", whole["split"]["write"], 0.3, "s"),
+        _target(f"camera ray cast {cfg.width}x{cfg.height}, four-light scene", r["raycast"]["bench_four_lights"]
+                ["rays_per_s"], 100e6, "rays/s", "higher", note="target is on 16 cores"),
+        _target("shadow maps of the four lights", r["shadow_maps"]["bench_four_lights"]["texels_per_s"], 50e6,
+                "texels/s", "higher", note="target is on 16 cores"),
+        _target(f"radial blur, 64 taps, {cfg.width}x{cfg.height}", r["post"]["radial_blur_64"]["seconds"], 0.05, "s",
+                note="target is on 16 cores"),
     ]
 
 
@@ -91,7 +101,7 @@ def run_bench(cfg: BenchConfig, argv: list[str] = (), log=None) -> dict:
              (("raycast", "shadow_maps"), lambda: bench_geometry(cfg)), ("post", lambda: bench_post(cfg)),
              ("reference", lambda: bench_reference(cfg)), ("memory", lambda: bench_memory(cfg)),
              ("baseline", lambda: bench_baseline(cfg, r["march"], r["scaling"])),
-             ("first_render", lambda: bench_first_render(cfg)))
+             ("first_render", lambda: bench_first_render(cfg)), ("whole_render", lambda: bench_whole_render(cfg)))
     for key, fn in steps:
         log(key if isinstance(key, str) else ", ".join(key), r)
         value = fn()
@@ -142,6 +152,9 @@ def format_report(r: dict) -> str:
     fr = r["first_render"]
     cold = f"{fr['cold']['process_s']:.2f} s" if fr["cold"] else "skipped"
     lines.append(f"first render: cold {cold}, warm {fr['warm']['process_s']:.2f} s")
+    wr = r["whole_render"]
+    lines.append(f"whole render {wr['width']}x{wr['height']} (four lights), fresh process: {wr['seconds']:.2f} s = "
+                 + ", ".join(f"{k} {v:.3f}" for k, v in wr["split"].items()))
     mem = r["memory"]
     lines.append(f"memory: tracemalloc peak {mem['tracemalloc_peak_bytes'] / 2**20:.0f} MiB, subprocess maxrss "
                  f"{mem['subprocess_maxrss_bytes'] / 2**20:.0f} MiB")

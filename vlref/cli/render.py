@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import sys
+import time
 from pathlib import Path
 
 from ..errors import InputError
@@ -14,6 +15,8 @@ from .progress_bar import StageBar
 HELP = "render a scene"
 MAIN_BUFFERS = ("final", "depth", "inscatter", "transmittance")
 """Buffers ``vlref render`` writes without ``--stages`` (EXR), besides final.png."""
+LIGHT_BUFFERS = ("final", "inscatter", "transmittance")
+"""The buffers ``--half-float`` stores as half floats (depth and the stage buffers stay float32)."""
 
 
 def parser() -> argparse.ArgumentParser:
@@ -27,6 +30,9 @@ def parser() -> argparse.ArgumentParser:
                         "a labelled side-by-side DIR/sheet.png (default: the scene's render.technique, physical "
                         "when unset)")
     p.add_argument("--stages", action="store_true", help="also write every pass's buffer and shadow map (default: off)")
+    p.add_argument("--half-float", action="store_true",
+                   help=f"store the light buffers ({', '.join(LIGHT_BUFFERS)}) as half-float EXR: half the bytes, "
+                        "11 significant bits, values above 65504 become inf (default: off, float32)")
     p.add_argument("--frames", metavar="A:B", help="render frames A..B-1 of the scene's [animation] as numbered "
                    "EXR sequences (<buffer>.NNNN.exr) plus preview.gif (and preview.mp4 with vlref[video]) "
                    "(default: one frame, render.frame)")
@@ -34,11 +40,35 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def run(args) -> int:
+def render_to_folder(scene, output, stages: bool = False, half_float: bool = False, quiet: bool = True):
+    """What ``vlref render`` does with one frame: render ``scene``, write its buffers and preview into ``output``
+    (all or nothing). Returns ``(result, phrase, write_seconds, kept)``: the render, the preview-exposure phrase,
+    the time from the end of the render to the files in place (exposure, EXR, PNG), and the files of an earlier
+    run that ``output`` still holds (this run did not write them)."""
     from ..io import output_dir, save_render
     from ..render import render
     from ..warmup import march_ahead
 
+    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
+    with StageBar(quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+        def stage(name: str) -> None:
+            if name == "shadow maps":  # built (part of the volumetric stage): the march comes next
+                march_ready()
+            else:
+                bar.stage(name)
+
+        result = render(scene, stages=stages, progress=stage)
+        earlier = _files(output)
+        start = time.perf_counter()
+        exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
+        with output_dir(output) as out:
+            save_render(out, result, stages=stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta,
+                        half=LIGHT_BUFFERS if half_float else ())
+            kept = sorted(earlier - _files(out))
+    return result, phrase, time.perf_counter() - start, kept
+
+
+def run(args) -> int:
     every = args.technique == "all"
     if every:
         if args.frames is not None:
@@ -49,20 +79,7 @@ def run(args) -> int:
         return _render_all(args, scene)
     if args.frames is not None:
         return _render_frames(args, scene)
-    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
-    with StageBar(args.quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
-        def stage(name: str) -> None:
-            if name == "shadow maps":  # built (part of the volumetric stage): the march comes next
-                march_ready()
-            else:
-                bar.stage(name)
-
-        result = render(scene, stages=args.stages, progress=stage)
-        exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
-        earlier = _files(args.output)
-        with output_dir(args.output) as out:
-            save_render(out, result, stages=args.stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta)
-            kept = sorted(earlier - _files(out))
+    result, phrase, _, kept = render_to_folder(scene, args.output, args.stages, args.half_float, args.quiet)
     if not args.quiet:
         _note_kept(args.output, kept)
         for note in result.notes:

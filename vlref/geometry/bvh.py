@@ -33,8 +33,8 @@ from numba import njit
 
 from .primitives import hit_triangle
 
-__all__ = ["Bvh", "build_bvh", "build_box_bvh", "ray_box", "descend", "pop_nearer", "push_children", "next_leaf",
-           "bvh_closest", "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
+__all__ = ["Bvh", "build_bvh", "build_box_bvh", "traversal_stack", "ray_box", "descend", "pop_nearer",
+           "push_children", "next_leaf", "bvh_closest", "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
 
 BINS = 16
 SAH_DEPTH = 48
@@ -240,6 +240,17 @@ def build_bvh(v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, max_leaf: int = 4)
 
 
 @njit(cache=True, fastmath=False)
+def traversal_stack():
+    """Scratch of one traversal: ``(nodes, entries)``, ``STACK`` node indices (int64) and entry distances.
+
+    The queries take it as their optional last argument (``None``: they allocate their own). Kernels
+    allocate one per row or chunk of rays and pass it to every query, where a closest hit used to allocate
+    four arrays per ray (on the device that was 6 % of the G-buffer's time; BENCHMARKS.md, "Whole frame").
+    """
+    return np.empty(STACK, dtype=np.int64), np.empty(STACK)
+
+
+@njit(cache=True, fastmath=False)
 def ray_box(bmin, bmax, k, ox, oy, oz, ix, iy, iz, tmin, tmax):
     """Entry ``t`` of the ray (origin o, inverse direction i) into box ``k`` clipped to ``[tmin, tmax]``; inf if missed.
 
@@ -317,14 +328,16 @@ def next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz
 
 
 @njit(cache=True, fastmath=False)
-def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only, ray, tmin, tmax):
+def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only, ray, tmin, tmax,
+                stack=None):
     """Closest triangle hit in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``: ``(t, i)`` (``i`` in
     packed order) or ``(inf, -1)``.
 
     With ``opaque_only`` the triangles whose ``opaque[i]`` is false are skipped.
 
     Front-to-back traversal: the nearer child first, the farther pushed on a fixed stack of
-    ``STACK`` (node, entry t) pairs and skipped on pop when its entry is beyond the best hit.
+    ``STACK`` (node, entry t) pairs (``stack``, see :func:`traversal_stack`) and skipped on pop when its
+    entry is beyond the best hit.
     """
     if node_first.shape[0] == 0:
         return INF, -1
@@ -333,8 +346,9 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
     best, found = tmax, -1
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
         return INF, -1
-    stack = np.empty(STACK, dtype=np.int64)
-    stack_t = np.empty(STACK)
+    if stack is None:
+        stack = traversal_stack()
+    nodes, stack_t = stack
     top, node = 0, 0
     while True:
         if node_count[node] > 0:
@@ -347,8 +361,8 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
             node = -1
         else:
             node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
-                                stack, stack_t, top)
-        node, top = pop_nearer(stack, stack_t, top, node, best)
+                                nodes, stack_t, top)
+        node, top = pop_nearer(nodes, stack_t, top, node, best)
         if node < 0:
             break
     if found < 0:
@@ -367,7 +381,7 @@ def _seen(hit_obj, hit_t, n, obj, t):
 
 @njit(cache=True, fastmath=False)
 def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tri_obj, opacity, tint, ray, tmin,
-                      tmax):
+                      tmax, stack=None):
     """Product of ``(1 - opacity) * tint`` over triangles crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx,
     dy, dz)``; 0 at the first opaque one.
 
@@ -381,17 +395,19 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
         return tr, tg, tb
     ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    stack = np.empty(STACK, dtype=np.int64)
+    if stack is None:
+        stack = traversal_stack()
+    nodes = stack[0]
     hit_obj = np.empty(DEDUP, dtype=np.int64)
     hit_t = np.empty(DEDUP)
     n_hits = 0
     top = 0
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
-        stack[0] = 0
+        nodes[0] = 0
         top = 1
     while True:
         node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
-                              stack, top)
+                              nodes, top)
         if node < 0:
             break
         first = node_first[node]

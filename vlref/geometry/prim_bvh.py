@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .bvh import STACK, Bvh, _inverse, build_box_bvh, descend, next_leaf, pop_nearer, ray_box
+from .bvh import Bvh, _inverse, build_box_bvh, descend, next_leaf, pop_nearer, ray_box, traversal_stack
 from .primitives import hit_primitive
 
 __all__ = ["PRIM_PAD", "PRIM_LEAF", "build_primitive_bvh", "prims_closest", "prims_occluded"]
@@ -48,13 +48,14 @@ def build_primitive_bvh(box_min: np.ndarray, box_max: np.ndarray) -> Bvh:
 
 @njit(cache=True, fastmath=False)
 def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, best, best_k,
-                  nx, ny, nz):
+                  nx, ny, nz, stack=None):
     """Merge the closest primitive hit of ``ray = (ox, oy, oz, dx, dy, dz)`` into ``(best, best_k, nx, ny, nz)``
     and return the updated tuple.
 
     ``(best, best_k)`` is the best hit so far (``best = tmax``, ``best_k = -1`` when none), ``best_k``
     a primitive index; a hit replaces it when ``(t, k) < (best, best_k)`` lexicographically.
-    Front-to-back traversal with a fixed stack, far children skipped when their entry is beyond ``best``.
+    Front-to-back traversal with a fixed stack (``stack``, see :func:`~vlref.geometry.bvh.traversal_stack`), far
+    children skipped when their entry is beyond ``best``.
     The normal is the primitive's outward normal (not yet faced toward the origin).
     """
     if node_first.shape[0] == 0:
@@ -63,8 +64,9 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
         return best, best_k, nx, ny, nz
-    stack = np.empty(STACK, dtype=np.int64)
-    stack_t = np.empty(STACK)
+    if stack is None:
+        stack = traversal_stack()
+    nodes, stack_t = stack
     top, node = 0, 0
     while True:
         if node_count[node] > 0:
@@ -77,29 +79,31 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
             node = -1
         else:
             node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
-                                stack, stack_t, top)
-        node, top = pop_nearer(stack, stack_t, top, node, best)
+                                nodes, stack_t, top)
+        node, top = pop_nearer(nodes, stack_t, top, node, best)
         if node < 0:
             break
     return best, best_k, nx, ny, nz
 
 
 @njit(cache=True, fastmath=False)
-def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax):
+def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, stack=None):
     """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``
-    (any-hit traversal, early exit)."""
+    (any-hit traversal, early exit; ``stack`` as :func:`prims_closest`'s)."""
     if node_first.shape[0] == 0:
         return False
     ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) == INF:
         return False
-    stack = np.empty(STACK, dtype=np.int64)
-    stack[0] = 0
+    if stack is None:
+        stack = traversal_stack()
+    nodes = stack[0]
+    nodes[0] = 0
     top = 1
     while True:
         node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
-                              stack, top)
+                              nodes, top)
         if node < 0:
             break
         first = node_first[node]

@@ -8,7 +8,8 @@ act on light through :func:`vlref.geometry.shadow_transmittance`).
 Per pixel with a hit at distance ``t`` on object ``k``: ``distance = t``, ``depth = t dot(d, f)``
 (linear eye depth, the view-space z), ``position = o + t d``, ``normal`` the unit normal facing
 the camera, ``albedo``/``emission`` of object ``k``, ``object_id = k``. Sky pixels: ``depth`` and
-``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange),
+``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange over rows, each
+row's rays cast together by :func:`~vlref.geometry.scene_geometry.closest_hits`),
 so the buffers are bit-identical for any thread count.
 """
 
@@ -21,7 +22,8 @@ from numba import njit, prange
 
 from ..camera import Camera
 from ..scene.model import Scene
-from .scene_geometry import Geometry, build_geometry, closest_hit
+from .bvh import traversal_stack
+from .scene_geometry import Geometry, build_geometry, closest_hits
 
 __all__ = ["GBuffer", "raycast"]
 
@@ -49,23 +51,33 @@ def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, 
                     object_id):
     h, w = depth.shape
     ox, oy, oz = origin[0], origin[1], origin[2]
-    for p in prange(h * w):
-        y, x = p // w, p % w
-        dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
-        cos_f = dx * forward[0] + dy * forward[1] + dz * forward[2]
-        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, far / cos_f, True)
-        object_id[y, x] = obj
-        if obj < 0:
-            depth[y, x] = np.inf
-            distance[y, x] = np.inf
-            continue
-        depth[y, x] = t * cos_f
-        distance[y, x] = t
-        position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
-        normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = nx, ny, nz
-        for c in range(3):
-            albedo[y, x, c] = geo.albedo[obj, c]
-            emission[y, x, c] = geo.emission[obj, c]
+    for y in prange(h):
+        origins = np.empty((w, 3))
+        cos_f = np.empty(w)
+        tmax = np.empty(w)
+        for x in range(w):
+            origins[x, 0], origins[x, 1], origins[x, 2] = ox, oy, oz
+            cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
+            tmax[x] = far / cos_f[x]
+        t_row = np.empty(w)
+        obj_row = np.empty(w, dtype=np.int64)
+        n_row = np.empty((w, 3))
+        closest_hits(geo, origins, dirs[y], tmax, True, traversal_stack(), t_row, obj_row, n_row)
+        for x in range(w):
+            dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
+            t, obj = t_row[x], obj_row[x]
+            object_id[y, x] = obj
+            if obj < 0:
+                depth[y, x] = np.inf
+                distance[y, x] = np.inf
+                continue
+            depth[y, x] = t * cos_f[x]
+            distance[y, x] = t
+            position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
+            normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_row[x, 0], n_row[x, 1], n_row[x, 2]
+            for c in range(3):
+                albedo[y, x, c] = geo.albedo[obj, c]
+                emission[y, x, c] = geo.emission[obj, c]
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
@@ -79,7 +91,7 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                                   camera.height if height is None else height)
     geo = (build_geometry(scene) if geometry is None else geometry).arrays
     h, w = camera.height, camera.width
-    dirs = np.ascontiguousarray(camera.ray_directions())
+    dirs = np.ascontiguousarray(camera.ray_directions(copy=False))  # read only: the camera's own array
     buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), position=np.zeros((h, w, 3)),
                   normal=np.zeros((h, w, 3)), albedo=np.zeros((h, w, 3)), emission=np.zeros((h, w, 3)),
                   object_id=np.empty((h, w), dtype=np.int32))

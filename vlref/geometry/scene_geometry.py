@@ -31,7 +31,8 @@ Queries (``t`` in units of ``|d|``; intervals are open):
   transparent occluders. Every surface *crossing* counts: a ray through a closed transparent
   solid (sphere, box, cylinder, closed mesh) is attenuated twice, once entering and once leaving,
   as a pane of glass per surface.
-* :func:`trace_distances` -- many rays at once, parallel over rays (shadow maps).
+* :func:`closest_hits` -- a row or chunk of rays in one call (the G-buffer and shadow-map kernels);
+  :func:`trace_distances` -- many rays at once, parallel over chunks of rays.
 
 Both queries give the same bits as a linear scan of the primitives in scene order followed by the
 triangle BVH (ties between primitives go to the lower index; :mod:`vlref.geometry.prim_bvh`).
@@ -48,14 +49,14 @@ import numpy as np
 from numba import njit, prange
 
 from ..scene.model import Box, Mesh, Plane, Scene, Sphere
-from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance
+from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance, traversal_stack
 from .prim_bvh import build_primitive_bvh, prims_closest, prims_occluded
 from .obj import load_obj, transform_vertices
 from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
                          pack_plane, pack_sphere, triangle_normal)
 
-__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "shadow_transmittance",
-           "trace_distances", "SHADOW_EPS"]
+__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance",
+           "trace_distances", "SHADOW_EPS", "RAY_CHUNK"]
 
 SHADOW_EPS = 1e-6
 """Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
@@ -177,15 +178,10 @@ def build_geometry(scene: Scene) -> Geometry:
 
 
 @njit(cache=True, fastmath=False)
-def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
-    """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
-
-    ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
-    ray origin (``dot(n, d) <= 0``).
-    """
-    # geo fields are bound to locals outside the loops: a namedtuple field read inside a loop costs
-    # reference-count traffic on every iteration (measured: ~200 ns per ray in BENCHMARKS.md)
-    lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
+def _closest(lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims,
+             node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
+             ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack):
+    """:func:`closest_hit` on the geo tuple's arrays (the fields of the same names)."""
     best, best_k, nx, ny, nz = tmax, -1, 0.0, 0.0, 0.0
     for j in range(lin.shape[0]):
         k = lin[j]
@@ -195,15 +191,14 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
         if t < best:
             best, best_k, nx, ny, nz = t, k, ax, ay, az
     ray = (ox, oy, oz, dx, dy, dz)
-    best, best_k, nx, ny, nz = prims_closest(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count,
-                                             geo.pnode_prims, geo.prim_kind, geo.prim_row, ray, tmin, tmax, best,
-                                             best_k, nx, ny, nz)
-    obj = geo.prim_obj[best_k] if best_k >= 0 else -1
-    t, i = bvh_closest(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2,
-                       geo.tri_opaque, opaque_only, ray, tmin, best)
+    best, best_k, nx, ny, nz = prims_closest(pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims, kind, row,
+                                             ray, tmin, tmax, best, best_k, nx, ny, nz, stack)
+    obj = prim_obj[best_k] if best_k >= 0 else -1
+    t, i = bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, opaque_only, ray, tmin,
+                       best, stack)
     if i >= 0:
-        best, obj = t, geo.tri_obj[i]
-        nx, ny, nz = triangle_normal(geo.e1, geo.e2, i)
+        best, obj = t, tri_obj[i]
+        nx, ny, nz = triangle_normal(e1, e2, i)
     if obj < 0:
         return INF, -1, 0.0, 0.0, 0.0
     if nx * dx + ny * dy + nz * dz > 0.0:
@@ -212,19 +207,60 @@ def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only):
 
 
 @njit(cache=True, fastmath=False)
-def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
+def closest_hit(geo, ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack=None):
+    """Nearest surface in ``(tmin, tmax)``: ``(t, obj, nx, ny, nz)``; ``(inf, -1, 0, 0, 0)`` on a miss.
+
+    ``opaque_only`` skips objects with ``opacity < 1``. The unit normal is flipped to face the
+    ray origin (``dot(n, d) <= 0``). ``stack``: the traversals' scratch
+    (:func:`~vlref.geometry.bvh.traversal_stack`; allocated here when ``None``). Many rays: :func:`closest_hits`.
+    """
+    if stack is None:
+        stack = traversal_stack()
+    return _closest(geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity, geo.pnode_min,
+                    geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims, geo.node_min, geo.node_max,
+                    geo.node_first, geo.node_count, geo.v0, geo.e1, geo.e2, geo.tri_opaque, geo.tri_obj,
+                    ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack)
+
+
+@njit(cache=True, fastmath=False)
+def closest_hits(geo, origins, dirs, tmax, opaque_only, stack, t_out, obj_out, normal_out):
+    """:func:`closest_hit` of rays ``i`` (``origins[i]``, ``dirs[i]``, ``t`` in ``(0, tmax[i])``) into ``t_out``,
+    ``obj_out`` and ``normal_out`` (N, 3), the same bits ray by ray.
+
+    The geo tuple's fields are read once for all the rays: a field read costs reference-count traffic
+    (atomic, shared by every thread), measured at ~200 ns of a ray's ~350 ns on one thread (BENCHMARKS.md,
+    "Whole frame"). Kernels call it on a row or chunk of rays with a row or chunk of scratch.
+    """
+    lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
+    pnode_min, pnode_max, pnode_first = geo.pnode_min, geo.pnode_max, geo.pnode_first
+    pnode_count, pnode_prims = geo.pnode_count, geo.pnode_prims
+    node_min, node_max, node_first, node_count = geo.node_min, geo.node_max, geo.node_first, geo.node_count
+    v0, e1, e2, tri_opaque, tri_obj = geo.v0, geo.e1, geo.e2, geo.tri_opaque, geo.tri_obj
+    for i in range(origins.shape[0]):
+        t_out[i], obj_out[i], normal_out[i, 0], normal_out[i, 1], normal_out[i, 2] = _closest(
+            lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims,
+            node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
+            origins[i, 0], origins[i, 1], origins[i, 2], dirs[i, 0], dirs[i, 1], dirs[i, 2], 0.0, tmax[i],
+            opaque_only, stack)
+
+
+@njit(cache=True, fastmath=False)
+def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack=None):
     """RGB transmittance of the segment ``o + t d``, ``t`` in ``(SHADOW_EPS / |d|, tmax)``.
 
     0 when an opaque surface (``opacity == 1``) lies on it (any-hit early exit), else
     ``prod (1 - opacity_k) * tint_k`` over the transparent surface crossings ``k`` (module docstring).
+    ``stack`` as :func:`closest_hit`'s.
     """
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm == 0.0:
         return 1.0, 1.0, 1.0
     tmin = SHADOW_EPS / norm
     ray = (ox, oy, oz, dx, dy, dz)
+    if stack is None:
+        stack = traversal_stack()
     if prims_occluded(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims,
-                      geo.prim_kind, geo.prim_row, ray, tmin, tmax):
+                      geo.prim_kind, geo.prim_row, ray, tmin, tmax, stack):
         return 0.0, 0.0, 0.0
     lin, kind, row, prim_obj, opacity, tint = (geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity,
                                                geo.tint)
@@ -244,17 +280,22 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax):
             tg *= clear * tint[o, 1]
             tb *= clear * tint[o, 2]
     mr, mg, mb = bvh_transmittance(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1,
-                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax)
+                                   geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax, stack)
     return tr * mr, tg * mg, tb * mb
+
+
+RAY_CHUNK = 256
+"""Rays per parallel iteration of the many-ray kernels (one traversal stack each)."""
 
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _trace_kernel(geo, origins, dirs, tmax, opaque_only, t_out, obj_out):
-    for r in prange(origins.shape[0]):
-        t, obj, _nx, _ny, _nz = closest_hit(geo, origins[r, 0], origins[r, 1], origins[r, 2],
-                                            dirs[r, 0], dirs[r, 1], dirs[r, 2], 0.0, tmax[r], opaque_only)
-        t_out[r] = t
-        obj_out[r] = obj
+    n = origins.shape[0]
+    for c in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        s, e = c * RAY_CHUNK, min(n, (c + 1) * RAY_CHUNK)
+        normal = np.empty((e - s, 3))
+        closest_hits(geo, origins[s:e], dirs[s:e], tmax[s:e], opaque_only, traversal_stack(), t_out[s:e],
+                     obj_out[s:e], normal)
 
 
 def trace_distances(geo: GeoArrays, origins, dirs, tmax, opaque_only: bool = True):

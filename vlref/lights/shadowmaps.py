@@ -52,7 +52,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
-from ..geometry import closest_hit, shadow_transmittance
+from ..geometry import RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
@@ -206,27 +206,76 @@ def cascade_sphere(camera: Camera, z0: float, z1: float) -> tuple[np.ndarray, fl
     return centre, float(np.sqrt(((world - centre) ** 2).sum(axis=1)).max())
 
 
+FACE_ORIGIN, FACE_FWD, FACE_RIGHT, FACE_UP, FACE_SCALE, FACE_NEAR, FACE_LIMIT = 0, 3, 6, 9, 12, 13, 14
+NFACE = 15
+"""A face's ray parameters (:func:`_face_rays`): origin (3), forward, right, up (3 each), scale, near, limit."""
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def _face_ray(face, ortho, res, k):
+    """Ray of texel ``k`` (row-major, row 0 at the top) of a face: ``(ox, oy, oz, dx, dy, dz, start, tmax)``.
+
+    Texel NDC ``x = ((c + 0.5) / res) * 2 - 1``, ``y = -(((r + 0.5) / res) * 2 - 1)`` (:func:`texel_grid`).
+    Perspective (spot, cube face; ``scale`` = tan of the half angle or 1): ``v = (fwd + (x s) right) + (y s) up``,
+    unit direction ``v / |v|``, origin ``pos + near v`` on the near plane, ``start = near |v|``,
+    ``tmax = max(range - start, 0)`` (``limit`` = range). Orthographic (a cascade; ``scale`` = radius,
+    ``near`` = back): origin ``((centre + (x r) right) + (y r) up) - back fwd``, direction ``fwd``,
+    ``start = 0``, ``tmax = limit`` (= back + radius). The operations and their order are those of the NumPy
+    construction this replaces, so the rays have the same bits.
+    """
+    row, col = k // res, k % res
+    x = (col + 0.5) / res * 2.0 - 1.0
+    y = -((row + 0.5) / res * 2.0 - 1.0)
+    xs, ys = x * face[FACE_SCALE], y * face[FACE_SCALE]
+    near = face[FACE_NEAR]
+    if ortho:
+        ox = (face[0] + xs * face[FACE_RIGHT]) + ys * face[FACE_UP] - near * face[FACE_FWD]
+        oy = (face[1] + xs * face[FACE_RIGHT + 1]) + ys * face[FACE_UP + 1] - near * face[FACE_FWD + 1]
+        oz = (face[2] + xs * face[FACE_RIGHT + 2]) + ys * face[FACE_UP + 2] - near * face[FACE_FWD + 2]
+        return ox, oy, oz, face[FACE_FWD], face[FACE_FWD + 1], face[FACE_FWD + 2], 0.0, face[FACE_LIMIT]
+    vx = (face[FACE_FWD] + xs * face[FACE_RIGHT]) + ys * face[FACE_UP]
+    vy = (face[FACE_FWD + 1] + xs * face[FACE_RIGHT + 1]) + ys * face[FACE_UP + 1]
+    vz = (face[FACE_FWD + 2] + xs * face[FACE_RIGHT + 2]) + ys * face[FACE_UP + 2]
+    length = math.sqrt(vx * vx + vy * vy + vz * vz)
+    start = near * length
+    return (face[0] + near * vx, face[1] + near * vy, face[2] + near * vz, vx / length, vy / length, vz / length,
+            start, max(face[FACE_LIMIT] - start, 0.0))
+
+
 @njit(cache=True, fastmath=False, parallel=True)
-def _cast_map(geo, origins, dirs, start, tmax, bias, slope_bias, want_tint, out, tint):
-    """Per ray: biased distance ``start + t`` to the first opaque hit (inf if none before ``tmax``)."""
-    for k in prange(origins.shape[0]):
-        ox, oy, oz = origins[k, 0], origins[k, 1], origins[k, 2]
-        dx, dy, dz = dirs[k, 0], dirs[k, 1], dirs[k, 2]
-        t, obj, nx, ny, nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, tmax[k], True)
-        if obj < 0:
-            out[k] = np.inf
-        else:
-            c = abs(nx * dx + ny * dy + nz * dz)
-            slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
-            out[k] = start[k] + t + bias + slope_bias * slope
-        if want_tint:
-            end = min(t, tmax[k])
-            tt, tobj, _nx, _ny, _nz = closest_hit(geo, ox, oy, oz, dx, dy, dz, 0.0, end, False)
-            if tobj < 0:
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
+    """Per texel of one face (:func:`_face_ray`): biased distance ``start + t`` to the first opaque hit (inf if
+    none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour."""
+    n = res * res
+    for chunk in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        s, e = chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)
+        m = e - s
+        origins, dirs, start, tmax = np.empty((m, 3)), np.empty((m, 3)), np.empty(m), np.empty(m)
+        for j in range(m):
+            (origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0], dirs[j, 1], dirs[j, 2], start[j],
+             tmax[j]) = _face_ray(face, ortho, res, s + j)
+        stack = traversal_stack()
+        t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
+        closest_hits(geo, origins, dirs, tmax, True, stack, t, obj, normal)
+        for j in range(m):
+            if obj[j] < 0:
+                out[s + j] = np.inf
             else:
-                r, g, b = shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, end * (1.0 - 1e-9))
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
+                c = abs(normal[j, 0] * dirs[j, 0] + normal[j, 1] * dirs[j, 1] + normal[j, 2] * dirs[j, 2])
+                slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
+                out[s + j] = start[j] + t[j] + bias + slope_bias * slope
+        if want_tint:
+            end = np.minimum(t, tmax)
+            tt, tobj = np.empty(m), np.empty(m, dtype=np.int64)
+            closest_hits(geo, origins, dirs, end, False, stack, tt, tobj, normal)
+            for j in range(m):
+                k = s + j
+                if tobj[j] < 0:
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+                else:
+                    r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
+                                                   dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
 
 
 def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
@@ -235,15 +284,10 @@ def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
     return np.broadcast_to(x[None, :], (res, res)).reshape(-1), np.broadcast_to(-x[:, None], (res, res)).reshape(-1)
 
 
-def _perspective(pos, right, up, fwd, scale, near, res):
-    """Rays of a perspective face, ``v = fwd + x·scale·right + y·scale·up``: origins on the near plane,
-    unit directions, and the distance from the light to each origin."""
-    x, y = texel_grid(res)
-    v = fwd[None, :] + (x * scale)[:, None] * right[None, :] + (y * scale)[:, None] * up[None, :]
-    length = np.linalg.norm(v, axis=1)
-    dirs = v / length[:, None]
-    start = near * length
-    return pos[None, :] + near * v, dirs, start
+def _face(origin, fwd, right, up, scale, near, limit) -> np.ndarray:
+    """The ``NFACE`` parameters of a face (:func:`_face_ray`)."""
+    return np.concatenate([np.asarray(v, dtype=np.float64) for v in (origin, fwd, right, up)]
+                          + [np.array([scale, near, limit], dtype=np.float64)])
 
 
 def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> ShadowMaps:
@@ -272,15 +316,14 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
         pos = lf[[F_PX, F_PY, F_PZ]]
         fwd, right, up = lf[[F_DX, F_DY, F_DZ]], lf[[F_RX, F_RY, F_RZ]], lf[[F_UX, F_UY, F_UZ]]
         res = sh.resolution
-        faces = []  # (name, origins, dirs, start, tmax)
+        faces = []  # (name, face parameters, orthographic)
         kind = int(packed.ints[i, I_KIND])
         if kind == KIND_SPOT:
-            o, d, s = _perspective(pos, right, up, fwd, lf[F_TAN_HALF], sh.near, res)
-            faces.append((f"shadow_spot_{i}", o, d, s, np.maximum(light.range - s, 0.0)))
+            faces.append((f"shadow_spot_{i}", _face(pos, fwd, right, up, lf[F_TAN_HALF], sh.near, light.range), False))
         elif kind == KIND_POINT:
             for f, (suffix, r, u, w) in enumerate(CUBE_FACES):
-                o, d, s = _perspective(pos, _CUBE[f, 0], _CUBE[f, 1], _CUBE[f, 2], 1.0, sh.near, res)
-                faces.append((f"shadow_point_{i}_face_{suffix}", o, d, s, np.maximum(light.range - s, 0.0)))
+                faces.append((f"shadow_point_{i}_face_{suffix}",
+                              _face(pos, _CUBE[f, 2], _CUBE[f, 0], _CUBE[f, 1], 1.0, sh.near, light.range), False))
         else:
             far = min(sh.distance, camera.far)
             splits = cascade_splits(camera.near, max(far, camera.near * (1 + 1e-6)), sh.cascades, sh.split_lambda)
@@ -289,21 +332,18 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
             for k in range(sh.cascades):
                 centre, radius = cascade_sphere(camera, splits[k], splits[k + 1])
                 back = radius + max(0.0, float(((centre - corners) @ fwd).max())) + 1.0
-                x, y = texel_grid(res)
-                o = centre + (x * radius)[:, None] * right + (y * radius)[:, None] * up - back * fwd
-                d = np.broadcast_to(fwd, o.shape)
                 floats[i, S_CASC + 5 * k:S_CASC + 5 * k + 5] = (*centre, radius, back)
-                faces.append((f"shadow_dir_{i}_cascade_{k}", o, d, np.zeros(len(o)), np.full(len(o), back + radius)))
+                faces.append((f"shadow_dir_{i}_cascade_{k}", _face(centre, fwd, right, up, radius, back, back + radius),
+                               True))
         ints[i, S_RES], ints[i, S_OFFSET] = res, offset
-        for name, o, d, s, tmax in faces:
-            out = np.empty(len(o))
-            tint = np.empty((len(o) if want_tint else 0, 4))
-            _cast_map(geo, np.ascontiguousarray(o), np.ascontiguousarray(d), s, np.ascontiguousarray(tmax),
-                      sh.bias, sh.slope_bias, want_tint, out, tint)
-            chunks.append(out.astype(np.float32))
-            tints.append(tint.astype(np.float32))
-            names.append((name, i, offset, len(o)))
-            offset += len(o)
+        for name, face, ortho in faces:
+            out = np.empty(res * res, dtype=np.float32)
+            tint = np.empty((res * res if want_tint else 0, 4), dtype=np.float32)
+            _cast_face(geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, out, tint)
+            chunks.append(out)
+            tints.append(tint)
+            names.append((name, i, offset, res * res))
+            offset += res * res
     data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
     tint = np.concatenate(tints) if tints else np.zeros((0, 4), dtype=np.float32)
     return ShadowMaps(ints, floats, data, tint, names)

@@ -94,28 +94,84 @@ def bilinear_sample(image, u, v, address: str = "clamp") -> np.ndarray:
     return out.reshape(u.shape + img.shape[2:])
 
 
+@njit(cache=True, fastmath=False, inline="always")
+def _index(i, n, lo, hi, offset, repeat):
+    """Array index of texel ``i`` of ``n``: ``i mod n`` when ``repeat``, else ``clamp(i, lo, hi) + offset``."""
+    return i % n if repeat else min(max(i, lo), hi) + offset
+
+
+@njit(cache=True, fastmath=False)
+def _row_taps(img, H, W, u, v, w, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y):
+    """``out[y, x] += w * bilinear(img, u[x], v)`` for every ``x`` of one row: one texel row pair for the whole row.
+
+    ``H``, ``W``: the image's size (``img`` may be padded by ``offset`` texels of 0 on every side, see
+    :func:`_radial_rows`); the arithmetic is :func:`_fetch_add`'s, operation for operation.
+    """
+    yy = v * H - 0.5
+    yf = math.floor(yy)
+    ty = yy - yf
+    row_a = img[_index(int(yf), H, lo_y, hi_y, offset, repeat)]
+    row_b = img[_index(int(yf) + 1, H, lo_y, hi_y, offset, repeat)]
+    C = img.shape[2]
+    for x in range(u.size):
+        xx = u[x] * W - 0.5
+        xf = math.floor(xx)
+        tx = xx - xf
+        xa = _index(int(xf), W, lo_x, hi_x, offset, repeat)
+        xb = _index(int(xf) + 1, W, lo_x, hi_x, offset, repeat)
+        for ch in range(C):
+            t00 = row_a[xa, ch]
+            t10 = row_a[xb, ch]
+            t01 = row_b[xa, ch]
+            t11 = row_b[xb, ch]
+            top = t00 + tx * (t10 - t00)
+            bottom = t01 + tx * (t11 - t01)
+            out[y, x, ch] = out[y, x, ch] + (top + ty * (bottom - top)) * w
+
+
 @njit(cache=True, fastmath=False, parallel=True)
-def _radial_kernel(img, lu, lv, scale, iterations, weight, tap_scale, decay, mode):
-    H, W, C = img.shape
-    out = np.zeros((H * W, C))
-    for p in prange(H * W):
-        u = (p % W + 0.5) / W
-        v = (p // W + 0.5) / H
-        du = (u - lu) * scale
+def _radial_rows(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay, mode, exposure, visibility):
+    """Listing 13-1 on every pixel, then ``(C * exposure) * visibility``: (H, W, C).
+
+    One output row per iteration, taps outer and pixels inner: the row's ``v`` (and so its texel row pair
+    and ``ty``) is the same for every pixel at each tap, and each pixel's ``u`` is stepped by the same
+    repeated subtraction as the shaders (a row buffer). Per pixel the operations and their order are
+    :func:`_fetch_add`'s, so the bits are those of the pixel-by-pixel loop and independent of the thread
+    count. ``mode``: 0 clamp, 1 repeat, 2 border, ``img`` then padded with one texel of 0 on every side
+    (a tap outside reads 0 where the clamped index lands in the padding).
+    """
+    C = img.shape[2]
+    out = np.zeros((H, W, C))
+    offset = 1 if mode == 2 else 0
+    lo_x, hi_x = -offset, W - 1 + offset
+    lo_y, hi_y = -offset, H - 1 + offset
+    repeat = mode == 1
+    for y in prange(H):
+        u = np.empty(W)
+        du = np.empty(W)
+        for x in range(W):
+            u[x] = (x + 0.5) / W
+            du[x] = (u[x] - lu) * scale
+        v = (y + 0.5) / H
         dv = (v - lv) * scale
-        _fetch_add(img, u, v, mode, 1.0, out[p])
+        _row_taps(img, H, W, u, v, 1.0, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y)
         dec = 1.0
         for _ in range(iterations):
-            u = u - du
+            for x in range(W):
+                u[x] = u[x] - du[x]
             v = v - dv
-            _fetch_add(img, u, v, mode, dec * tap_scale * weight, out[p])
+            _row_taps(img, H, W, u, v, dec * tap_scale * weight, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y)
             dec = dec * decay
-    return out.reshape((H, W, C))
+        for x in range(W):
+            for ch in range(C):
+                out[y, x, ch] = (out[y, x, ch] * exposure) * visibility
+    return out
 
 
 def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float, weight: float, tap_scale: float,
-                 decay: float, address: str) -> np.ndarray:
-    """``C = tex(u) + sum_{i=1..iterations} tex(u - i delta) * ((dec_i * tap_scale) * weight)``.
+                 decay: float, address: str, exposure: float = 1.0, visibility: float = 1.0) -> np.ndarray:
+    """``(C * exposure) * visibility`` with
+    ``C = tex(u) + sum_{i=1..iterations} tex(u - i delta) * ((dec_i * tap_scale) * weight)``.
 
     ``delta = (u - l) * (1/divisor * density)``, ``u`` stepped by repeated subtraction, as the shaders do.
     """
@@ -126,8 +182,12 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
     if not np.isfinite(light_uv).all():
         raise ValueError(f"light_uv: must be finite, got {light_uv!r} (use light_screen_uv)")
     img3 = np.ascontiguousarray(img if img.ndim == 3 else img[..., None])
-    out = _radial_kernel(img3, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
-                         float(weight), float(tap_scale), float(decay), ADDRESS_MODES.index(address))
+    H, W = img3.shape[:2]
+    mode = ADDRESS_MODES.index(address)
+    if address == "border":
+        img3 = np.pad(img3, ((1, 1), (1, 1), (0, 0)))
+    out = _radial_rows(img3, H, W, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
+                       float(weight), float(tap_scale), float(decay), mode, float(exposure), float(visibility))
     return out if img.ndim == 3 else out[..., 0]
 
 
@@ -139,8 +199,8 @@ def radial_blur(image, light_uv, num_samples: int, density: float, weight: float
     weight 5.65, decay 1.0, exposure 0.0034) are in ``vlref.scene.technique_params.RadialParams``.
     Output shape = ``image``'s; add it to the scene with ``composite.composite_add``.
     """
-    c = _radial_loop(image, light_uv, num_samples, num_samples, density, weight, 1.0, decay, address)
-    return (c * exposure) * visibility
+    return _radial_loop(image, light_uv, num_samples, num_samples, density, weight, 1.0, decay, address, exposure,
+                        visibility)
 
 
 def disenone_scatter(radiated, light_uv, density: float = 1.0, weight: float = 1.0 / 32.0, decay: float = 1.0,
