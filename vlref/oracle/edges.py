@@ -1,0 +1,103 @@
+"""Where a conformant rasteriser may legitimately differ from vlref: the edge zone of a comparison.
+
+A rasteriser samples triangles at pixel centres, tessellates curved surfaces and quantises depth, and
+a shadow map decides lit / shadowed per texel; two faithful renderers of one scene then differ only
+*near geometry*: within a pixel or two of a depth discontinuity (a silhouette moves by a fraction of a
+pixel) and within a texel or two of a shadow silhouette (the map's caster edge moves by a fraction of a
+texel). :mod:`vlref.oracle.compare` applies its looser per-pixel tolerance (``edge_rel_tol``,
+``edge_abs_tol``) in this zone only and allows no failing pixel outside it.
+
+The zone is a width in pixels (``edge_pixels`` = k) around geometric features, so its share of the
+image falls as ``1/resolution`` (a silhouette's length grows as W, the image's area as W²): the
+allowance does not grow with the image, unlike a failing-pixel fraction.
+
+* :func:`depth_discontinuities`: the two pixels of every 4-neighbour pair whose eye depths ``z1 <= z2``
+  satisfy ``z2 - z1 > DEPTH_JUMP · z1``, or where exactly one of the two is sky (non-finite);
+* :func:`changes`: pixels whose value differs from a 4-neighbour (a visibility image's shadow
+  silhouettes);
+* :func:`dilate`: grown by k pixels in the chessboard metric (a (2k+1)² square);
+* :func:`block_any`: a full-resolution zone carried to a lower-resolution buffer (a texel is in the
+  zone when any pixel of its block is).
+
+Shadow silhouettes measured in the light's texels are in :func:`vlref.oracle.verdict.shadow_zone`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+
+__all__ = ["DEPTH_JUMP", "depth_discontinuities", "changes", "dilate", "edge_zone", "block_any"]
+
+DEPTH_JUMP = 0.05
+"""Relative depth step between neighbouring pixels that counts as a discontinuity. A plane seen at
+grazing angle changes depth by ``z · Δθ / tan(grazing angle)`` per pixel, so only its last pixels before
+the horizon exceed 5 %, and fewer of them at higher resolution."""
+
+
+def _pairs(a: np.ndarray, differ) -> np.ndarray:
+    """(H, W) bool: both pixels of every horizontal or vertical neighbour pair where ``differ(p, q)``."""
+    out = np.zeros(a.shape[:2], bool)
+    for axis in (0, 1):
+        p = np.take(a, range(a.shape[axis] - 1), axis=axis)
+        q = np.take(a, range(1, a.shape[axis]), axis=axis)
+        d = differ(p, q)
+        lo = [slice(None)] * 2
+        hi = [slice(None)] * 2
+        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
+        out[tuple(lo)] |= d
+        out[tuple(hi)] |= d
+    return out
+
+
+def depth_discontinuities(depth: np.ndarray, jump: float = DEPTH_JUMP) -> np.ndarray:
+    """(H, W) bool: pixels on either side of a depth discontinuity of ``depth`` (eye depth, inf = sky)."""
+    z = np.asarray(depth, dtype=np.float64)
+
+    def differ(p, q):
+        fp, fq = np.isfinite(p), np.isfinite(q)
+        both = fp & fq
+        lo = np.where(both, np.minimum(p, q), 0.0)
+        hi = np.where(both, np.maximum(p, q), 0.0)
+        return (fp != fq) | (both & (hi - lo > jump * lo))
+
+    return _pairs(z, differ)
+
+
+def changes(image: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels whose value differs from a 4-neighbour's in any channel."""
+    a = np.asarray(image, dtype=np.float64)
+    a = a[:, :, None] if a.ndim == 2 else a
+    return _pairs(a, lambda p, q: np.any(p != q, axis=-1))
+
+
+def dilate(mask: np.ndarray, k: int) -> np.ndarray:
+    """``mask`` grown by ``k`` pixels (chessboard distance <= k)."""
+    m = np.asarray(mask, dtype=bool)
+    if k <= 0 or not m.any():
+        return m.copy()
+    return ndimage.binary_dilation(m, structure=np.ones((3, 3), bool), iterations=int(k))
+
+
+def edge_zone(k: int, depths=(), features=()) -> np.ndarray:
+    """The edge zone: depth discontinuities of every image in ``depths`` and the ``features`` (bool
+    masks of other silhouettes) together, dilated by ``k`` pixels. Needs at least one input."""
+    masks = [depth_discontinuities(z) for z in depths] + [np.asarray(f, dtype=bool) for f in features]
+    if not masks:
+        raise ValueError("edge_zone needs a depth image or a feature mask")
+    return dilate(np.logical_or.reduce(masks), k)
+
+
+def block_any(mask: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """A full-resolution (H, W) ``mask`` on an (h, w) buffer of a technique at ``1/f`` resolution (``h =
+    H // f``, vlref's and a port's rounding): texel (i, j) covers pixels ``[i·f, (i+1)·f)`` per axis (the last
+    row and column also the pixels left over when f does not divide the size) and is true when any is."""
+    m = np.asarray(mask, dtype=bool)
+    H, W = m.shape
+    h, w = shape
+    fy, fx = H // h, W // w
+    out = m[:h * fy, :w * fx].reshape(h, fy, w, fx).any(axis=(1, 3))
+    out[-1, :] |= m[h * fy:, :w * fx].reshape(-1, w, fx).any(axis=(0, 2))
+    out[:, -1] |= m[:, w * fx:].any(axis=1)[:h * fy].reshape(h, fy).any(axis=1)
+    out[-1, -1] |= m[h * fy:, w * fx:].any()
+    return out
