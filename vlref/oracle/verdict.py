@@ -67,6 +67,11 @@ DEFAULT_PRESET = "gpu-half"
 SCENE_PRESETS = {"depth": "raster-depth", "shadow_map": "raster-shadow-map", "shadow_test": "raster-shadow-test",
                  "scene_colour": "raster-colour", "end_to_end": "end-to-end"}
 """Preset of each against-the-scene comparison."""
+KNIFE_EDGE = 1e-5
+"""Relative nudge of the lights and the shadow-map distances that finds the knife-edge pixels of
+:func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
+KNIFE_JUMP = 1e-3
+"""A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
 CAMERA_TOL = 1e-4
 """Largest accepted difference of the port's camera from the scene's: position (metres, relative to
 ``1 + |position|``), rotation matrix entries, and fov (degrees); float32 matrices round at ~1e-7."""
@@ -188,7 +193,9 @@ def _inverse(z: np.ndarray) -> np.ndarray:
 
 def _port_tile_distances(tile, light, sh, encoding: str, convention: str, geometry):
     """(res, res) vlref's and the port's biased distance along each texel ray of a port ``tile``: the eye
-    (perspective) or the view plane (orthographic) to the first opaque hit, plus bias (``inf`` = empty)."""
+    (perspective) or the view plane (orthographic) to the first opaque hit, plus bias (``inf`` = empty).
+    Spot and point lights: distances beyond ``range`` count as empty in both (a port's far plane is a plane,
+    vlref's range a sphere; no light reaches there)."""
     res = tile.texels.shape[0]
     origin_v, dir_v = tile_rays(tile, res)
     inv_v = np.linalg.inv(tile.view)
@@ -202,7 +209,10 @@ def _port_tile_distances(tile, light, sh, encoding: str, convention: str, geomet
         tmax = np.maximum(light.range - start, 0.0)
     ref = cast_rays(geometry, origin + start[:, None] * d, d, start, tmax, sh.bias, sh.slope_bias)
     port = np.einsum("ij,ij->i", tile_points(tile, encoding, convention) - origin, d)
-    return ref.reshape(res, res), np.where(np.isnan(port), np.inf, port).reshape(res, res)
+    port = np.where(np.isnan(port), np.inf, port)
+    if light.type != "directional":
+        ref, port = (np.where(a > light.range, np.inf, a) for a in (ref, port))
+    return ref.reshape(res, res), port.reshape(res, res)
 
 
 # --------------------------------------------------------------------------- judging
@@ -254,7 +264,45 @@ def _scene_without_shadows(scene):
     return scene.replace(lights=tuple(dataclasses.replace(li, shadows=None) for li in scene.lights))
 
 
-def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool) -> list[_Comparison]:
+def _nudged(port, frame_p, sign: int):
+    """The port's frame with every light moved by ``sign · KNIFE_EDGE · (1 + |position|)`` along (1, 1, 1)/√3
+    and every shadow-map distance scaled by ``1 + sign · KNIFE_EDGE``."""
+    from ..lights import pack_lights
+
+    step = sign * KNIFE_EDGE
+    scene = port.scene.replace(lights=tuple(
+        dataclasses.replace(li, position=tuple(np.asarray(li.position, dtype=np.float64)
+                                               + step * (1.0 + np.linalg.norm(li.position)) / math.sqrt(3.0)))
+        for li in port.scene.lights))
+    cache = {k: ShadowMaps(m.ints, m.floats, (m.data * np.float32(1.0 + step)).astype(np.float32), m.tint, m.names)
+             for k, m in frame_p.shadow_cache.items()}
+    return scene, dataclasses.replace(frame_p, scene=scene, lights=pack_lights(scene), shadow_cache=cache)
+
+
+def knife_edges(port, frame_p, technique) -> dict[str, np.ndarray]:
+    """Per float image buffer of the technique, (h, w) bool: its knife-edge pixels, whose value jumps when the
+    lights move by ``KNIFE_EDGE`` (relative) and the map distances scale by ``1 ± KNIFE_EDGE``: a march
+    sample there lies on a discrete decision (a shadow-volume boundary, a shadow-map texel boundary, a
+    light cone's surface), which a float32 port may take the other way. A jump is a change of more than
+    ``KNIFE_JUMP · (|value| + mean |value|)`` in a channel (continuous changes are ~KNIFE_EDGE). Downstream
+    passes (upsample, blur, composite) carry the jump, so each buffer's own pixels are marked."""
+    lo = technique.render(*_nudged(port, frame_p, -1))
+    hi = technique.render(*_nudged(port, frame_p, 1))
+    out = {}
+    for name, a in lo.items():
+        a, b = np.asarray(a), np.asarray(hi.get(name))
+        if a.dtype.kind != "f" or a.ndim not in (2, 3) or b.shape != a.shape:
+            continue
+        a, b = (x[:, :, None] if x.ndim == 2 else x for x in (a, b))
+        finite = np.isfinite(a) & np.isfinite(b)
+        level = float(np.mean(np.abs(a[finite]))) if finite.any() else 0.0
+        fa, fb = np.where(finite, a, 0.0), np.where(finite, b, 0.0)
+        jump = np.where(finite, np.abs(fb - fa) > KNIFE_JUMP * (np.abs(fa) + level), a != b)
+        out[name] = jump.any(axis=2)
+    return out
+
+
+def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique) -> list[_Comparison]:
     """The ``[[passes]]`` against ``vlref march`` on the port's own buffers."""
     if not port.passes:
         return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
@@ -262,6 +310,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool) -> l
     hit = np.isfinite(port.depth)
     points = frame_p.gbuffer.position[hit]
     zones: dict[int, np.ndarray] = {}
+    knife = knife_edges(port, frame_p, technique)
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -276,6 +325,8 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool) -> l
         ref = np.asarray(own[p.buffer], dtype=np.float64)
         ref = ref[:, :, None] if ref.ndim == 2 else ref
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if ref.shape[0] <= hit.shape[0] else None
+        if zone is not None and p.buffer in knife and tol.edge_pixels > 0:
+            zone |= knife[p.buffer]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, light_reaches, p.buffer,
                             (f"vlref march {p.buffer}", p.path)))
@@ -307,7 +358,7 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     frame_p = port_frame(port)
     own = technique.render(port.scene, frame_p)
 
-    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches)
+    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique)
     comparisons.append(_camera_check(port, frame.camera))
     comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
