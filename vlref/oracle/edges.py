@@ -11,8 +11,8 @@ The zone is a width in pixels (``edge_pixels`` = k) around geometric features, s
 image falls as ``1/resolution`` (a silhouette's length grows as W, the image's area as W²): the
 allowance does not grow with the image, unlike a failing-pixel fraction.
 
-* :func:`depth_discontinuities`: the two pixels of every 4-neighbour pair whose eye depths ``z1 <= z2``
-  satisfy ``z2 - z1 > DEPTH_JUMP · z1``, or where exactly one of the two is sky (non-finite);
+* :func:`depth_discontinuities`: pixels where inverse depth (affine over a plane in screen space) bends
+  by more than ``DEPTH_JUMP`` of itself between neighbours: silhouettes, creases, sky next to a surface;
 * :func:`changes`: pixels whose value differs from a 4-neighbour (a visibility image's shadow
   silhouettes);
 * :func:`dilate`: grown by k pixels in the chessboard metric (a (2k+1)² square);
@@ -30,9 +30,9 @@ from scipy import ndimage
 __all__ = ["DEPTH_JUMP", "depth_discontinuities", "changes", "dilate", "edge_zone", "block_any"]
 
 DEPTH_JUMP = 0.05
-"""Relative depth step between neighbouring pixels that counts as a discontinuity. A plane seen at
-grazing angle changes depth by ``z · Δθ / tan(grazing angle)`` per pixel, so only its last pixels before
-the horizon exceed 5 %, and fewer of them at higher resolution."""
+"""Second difference of inverse depth, relative to the local inverse depth, that counts as a
+discontinuity (:func:`depth_discontinuities`); zero on planes, ~``(pixel footprint / radius)²`` on a curved
+surface, of order 1 at a silhouette."""
 
 
 def _pairs(a: np.ndarray, differ) -> np.ndarray:
@@ -51,17 +51,27 @@ def _pairs(a: np.ndarray, differ) -> np.ndarray:
 
 
 def depth_discontinuities(depth: np.ndarray, jump: float = DEPTH_JUMP) -> np.ndarray:
-    """(H, W) bool: pixels on either side of a depth discontinuity of ``depth`` (eye depth, inf = sky)."""
+    """(H, W) bool: pixels at a depth discontinuity of ``depth`` (eye depth, inf = sky).
+
+    Inverse depth ``w = 1/z`` (sky: 0) is affine in screen coordinates over a plane, so its second difference
+    along a row or column vanishes there at every resolution and grazing angle; three consecutive pixels
+    ``a, b, c`` are all marked where ``|a - 2b + c| > jump · max(a, b, c)``: a silhouette, a crease, or sky
+    next to a surface."""
     z = np.asarray(depth, dtype=np.float64)
-
-    def differ(p, q):
-        fp, fq = np.isfinite(p), np.isfinite(q)
-        both = fp & fq
-        lo = np.where(both, np.minimum(p, q), 0.0)
-        hi = np.where(both, np.maximum(p, q), 0.0)
-        return (fp != fq) | (both & (hi - lo > jump * lo))
-
-    return _pairs(z, differ)
+    ok = np.isfinite(z) & (z > 0)
+    w = np.where(ok, 1.0 / np.where(ok, z, 1.0), 0.0)
+    out = np.zeros(w.shape, bool)
+    for axis in (0, 1):
+        n = w.shape[axis]
+        if n < 3:
+            continue
+        a, b, c = (np.take(w, range(k, n - 2 + k), axis=axis) for k in range(3))
+        hit = np.abs(a - 2.0 * b + c) > jump * np.maximum(np.maximum(a, b), c)
+        for k in range(3):
+            index = [slice(None)] * 2
+            index[axis] = slice(k, n - 2 + k)
+            out[tuple(index)] |= hit
+    return out
 
 
 def changes(image: np.ndarray) -> np.ndarray:

@@ -243,8 +243,14 @@ def _judged(name: str, group: str, report: Report, silent_check: bool, buffer: s
 
 
 def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, names) -> _Comparison:
+    """``compare_arrays`` of vlref's ``ref`` and the port's ``test``; a non-finite port value where vlref's is
+    compared (finite) is a failing pixel (set to float32's max), not bad input."""
     tol = tolerance(preset)
-    report = compare_arrays(ref, test, tol, mask, flip=False, names=names, edges=zone)
+    t = np.asarray(test, dtype=np.float64)
+    t = t[:, :, None] if t.ndim == 2 else t
+    compared = np.ones(t.shape[:2], bool) if mask is None else mask
+    t = np.where(~np.isfinite(t) & compared[:, :, None], float(np.finfo(np.float32).max), t)
+    report = compare_arrays(ref, t, tol, mask, flip=False, names=names, edges=zone)
     return _judged(name, group, report, light_reaches, buffer)
 
 
