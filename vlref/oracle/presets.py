@@ -48,12 +48,12 @@ class Tolerance:
     max_fail_fraction: float
     max_mean_abs: float
     max_flip_mean: float | None = None
-    edge_pixels: int = 0
-    edge_rel_tol: float | None = None
-    edge_abs_tol: float | None = None
     scale: str = "absolute"
     name: str = "custom"
     description: str = ""
+    edge_pixels: int = 0
+    edge_rel_tol: float | None = None
+    edge_abs_tol: float | None = None
 
     @property
     def edge_rel(self) -> float:

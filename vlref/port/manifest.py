@@ -259,7 +259,12 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
 
 
 def _check_maps(scene, exported: set, file: str) -> None:
-    """:class:`InputError` naming the first light whose scene shadows are hard or pcf but has no exported map."""
+    """:class:`InputError` naming an exported light the scene lacks, or the first light whose scene shadows
+    are hard or pcf but has no exported map."""
+    n = len(scene.lights)
+    for i in sorted(exported):
+        if not 0 <= i < n:
+            raise InputError(file, f"shadow_maps[light={i}]", f"no light {i} (the scene has {n})")
     for i, light in enumerate(scene.lights):
         sh = light.shadows
         if sh is not None and sh.enabled and sh.filter != "exact" and i not in exported:
