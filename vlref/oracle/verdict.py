@@ -30,9 +30,10 @@ take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exa
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
 reference is whichever of vlref's two decisions lies closest to the port's value.
 
-Degenerate comparisons fail: when light reaches the camera in vlref's render of the scene (its in-scatter
-is nonzero somewhere), a comparison whose reference is zero over every compared pixel proves nothing and
-fails with that reason. A port whose manifest declares no ``final`` or no ``[[passes]]`` cannot pass the
+Degenerate comparisons fail: when vlref's render of the scene says a buffer carries light (the pass's
+buffer, or for the final frame the in-scatter, is nonzero somewhere), a comparison whose reference is zero
+over every compared pixel proves nothing and fails with that reason (a black port's maps that shadow
+everything make vlref's march on its buffers black too). A port whose manifest declares no ``final`` or no ``[[passes]]`` cannot pass the
 group it is missing. Missing shadow maps of shadowed lights are bad input (:func:`vlref.port.load_port`),
 unless the manifest says ``shadows = false``: the port is then judged against the scene without shadows.
 """
@@ -250,7 +251,7 @@ def _judged(name: str, group: str, report: Report, silent_check: bool, buffer: s
     return _Comparison(name, group, report.tolerance.name, report, reason)
 
 
-def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, names) -> _Comparison:
+def _compare(name, group, ref, test, preset, mask, zone, signal: bool, buffer, names) -> _Comparison:
     """``compare_arrays`` of vlref's ``ref`` and the port's ``test``; a non-finite port value where vlref's is
     compared (finite) is a failing pixel (set to float32's max), not bad input."""
     tol = tolerance(preset)
@@ -259,7 +260,7 @@ def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, 
     compared = np.ones(t.shape[:2], bool) if mask is None else mask
     t = np.where(~np.isfinite(t) & compared[:, :, None], float(np.finfo(np.float32).max), t)
     report = compare_arrays(ref, t, tol, mask, flip=False, names=names, edges=zone)
-    return _judged(name, group, report, light_reaches, buffer)
+    return _judged(name, group, report, signal, buffer)
 
 
 def _camera_check(port, scene_camera) -> _Comparison:
@@ -329,8 +330,10 @@ def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     return np.where(jump[:, :, None], chosen, ref)
 
 
-def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique) -> list[_Comparison]:
-    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers."""
+def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique) -> list[_Comparison]:
+    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers. A pass whose buffer carries a
+    signal in vlref's render of the scene (``reference``: nonzero somewhere) but is zero over every compared
+    pixel of the march on the port's buffers fails as degenerate."""
     if not port.passes:
         return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
                                                            "march and post passes are not judged")]
@@ -358,7 +361,8 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, tech
             if zone is not None and tol.edge_pixels > 0:
                 zone |= knife[p.buffer][0]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
-        out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, light_reaches, p.buffer,
+        signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
+        out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
                             (f"vlref march {p.buffer}", p.path)))
     return out
 
@@ -388,7 +392,7 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     frame_p = port_frame(port)
     own = technique.render(port.scene, frame_p)
 
-    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique)
+    comparisons = _own_passes(port, frame_p, own, own_preset, reference, technique)
     comparisons.append(_camera_check(port, frame.camera))
     comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
