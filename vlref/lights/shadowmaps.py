@@ -257,13 +257,7 @@ def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
         stack = traversal_stack()
         t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
         closest_hits(geo, origins, dirs, tmax, True, stack, t, obj, normal)
-        for j in range(m):
-            if obj[j] < 0:
-                out[s + j] = np.inf
-            else:
-                c = abs(normal[j, 0] * dirs[j, 0] + normal[j, 1] * dirs[j, 1] + normal[j, 2] * dirs[j, 2])
-                slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
-                out[s + j] = start[j] + t[j] + bias + slope_bias * slope
+        _store_hits(t, obj, normal, dirs, start, bias, slope_bias, out[s:e])
         if want_tint:
             end = np.minimum(t, tmax)
             tt, tobj = np.empty(m), np.empty(m, dtype=np.int64)
@@ -284,11 +278,36 @@ def cast_rays(geometry, origins: np.ndarray, dirs: np.ndarray, start: np.ndarray
     hit in ``(0, tmax)`` (``inf`` where none): what a map texel with these rays stores (module docstring),
     for rays a caller chooses (a port's texel rays, :mod:`vlref.oracle.verdict`)."""
     out = np.empty(len(origins))
-    _cast_map(geometry.arrays, np.ascontiguousarray(origins, dtype=np.float64),
-              np.ascontiguousarray(dirs, dtype=np.float64), np.ascontiguousarray(start, dtype=np.float64),
-              np.ascontiguousarray(tmax, dtype=np.float64), float(bias), float(slope_bias), False, out,
-              np.empty((0, 4)))
+    _cast_rays(geometry.arrays, np.ascontiguousarray(origins, dtype=np.float64),
+               np.ascontiguousarray(dirs, dtype=np.float64), np.ascontiguousarray(start, dtype=np.float64),
+               np.ascontiguousarray(tmax, dtype=np.float64), float(bias), float(slope_bias), out)
     return out
+
+
+@njit(cache=True, fastmath=False)
+def _store_hits(t, obj, normal, dirs, start, bias, slope_bias, out):
+    """What a texel stores for each ray's first opaque hit (inf for none): the biased distance
+    ``start + t + bias + slope_bias · min(tan α, MAX_SLOPE)``, α the angle between the ray and the normal."""
+    for j in range(t.shape[0]):
+        if obj[j] < 0:
+            out[j] = np.inf
+        else:
+            c = abs(normal[j, 0] * dirs[j, 0] + normal[j, 1] * dirs[j, 1] + normal[j, 2] * dirs[j, 2])
+            slope = min(math.sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), MAX_SLOPE)
+            out[j] = start[j] + t[j] + bias + slope_bias * slope
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _cast_rays(geo, origins, dirs, start, tmax, bias, slope_bias, out):
+    """:func:`cast_rays` in chunks of ``RAY_CHUNK`` rays, each chunk on one thread."""
+    n = origins.shape[0]
+    for chunk in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
+        s, e = chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)
+        m = e - s
+        stack = traversal_stack()
+        t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
+        closest_hits(geo, origins[s:e], dirs[s:e], tmax[s:e], True, stack, t, obj, normal)
+        _store_hits(t, obj, normal, dirs[s:e], start[s:e], bias, slope_bias, out[s:e])
 
 
 def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
