@@ -36,7 +36,7 @@ from ..post.downsample import downsample_vl
 from ..post.resolution import low_res_size
 from ..post.upsample import vl_upsample
 from ..scene.model import Cookie, HeightFog, Medium, Noise
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "notes", "light_segments", "vl_medium", "srgb_to_linear", "cone_mesh_planes"]
 

@@ -27,7 +27,7 @@ from ..post.composite import composite_urp, unorm16
 from ..post.downsample import downsample_point
 from ..post.resolution import low_res_size
 from ..post.upsample import urp_upsample
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "main_light", "has_main_light", "load_jitter"]
 
