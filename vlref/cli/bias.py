@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..io import output_dir
+from ..reference.bias import technique_bias
 from .options import add_scene_arguments, load_scene_checked, technique_names
 
 HELP = "a technique's error against the reference, and how it falls with steps"
@@ -20,9 +22,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import output_dir
-    from ..reference.bias import technique_bias
-
     scene = load_scene_checked(args)
     steps = tuple(int(s) for s in args.steps.split(",")) if args.steps else None
     report = technique_bias(scene, args.technique, steps) if steps else technique_bias(scene, args.technique)

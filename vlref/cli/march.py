@@ -7,6 +7,9 @@ import argparse
 import sys
 import time
 
+from ..io import check_output_dir
+from ..port import load_port, march, save_march
+
 HELP = "march and post passes on a port's own buffers"
 
 
@@ -23,9 +26,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import check_output_dir
-    from ..port import load_port, march, save_march
-
     start = time.perf_counter()
     check_output_dir(args.output)
     port = load_port(args.manifest, args.set or ())

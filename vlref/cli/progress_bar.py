@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 
+from ..progress import reporting
+
 __all__ = ["StageBar"]
 
 
@@ -41,7 +43,6 @@ class StageBar:
             self.bar = None
 
     def __enter__(self):
-        from ..progress import reporting
         self._reporting = reporting(self.rows)
         self._reporting.__enter__()
         self._show(0, self.stages, "stage", self.desc)

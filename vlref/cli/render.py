@@ -6,6 +6,10 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..io import output_dir, save_render
+from ..render import render
+from ..sequence import parse_frames, write_sequence
+from ..warmup import march_ahead
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names
 from .progress_bar import StageBar
 
@@ -30,10 +34,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import output_dir, save_render
-    from ..render import render
-    from ..warmup import march_ahead
-
     scene = load_scene_checked(args)
     if args.frames is not None:
         return _render_frames(args, scene)
@@ -60,9 +60,6 @@ def run(args) -> int:
 
 def _render_frames(args, scene) -> int:
     """``vlref render --frames A:B``: a numbered EXR sequence and previews (:mod:`vlref.sequence`)."""
-    from ..io import output_dir
-    from ..sequence import parse_frames, write_sequence
-
     frames = parse_frames(args.frames, scene)
     with StageBar(args.quiet, len(frames), f"render {Path(scene.source).stem} frames") as bar, \
             output_dir(args.output) as out:

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..scene import bundled_scenes, load_scene
+
 HELP = "list the bundled scenes"
 
 
@@ -12,7 +14,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..scene import bundled_scenes, load_scene
     for name, path in bundled_scenes().items():
         print(f"{name:16s} {load_scene(path).description}")
     return 0

@@ -12,6 +12,11 @@ from typing import Sequence
 
 import numpy as np
 
+from ..geometry import build_geometry
+from ..geometry.raycast import GBuffer
+from ..io import output_dir, write_exr
+from ..lights import pack_lights
+from ..render import Frame, scene_hash
 from ..techniques import FRAME_BUFFERS, TECHNIQUES
 from .manifest import PortBuffers, load_port
 from .shadows import shadow_maps_from_port
@@ -22,11 +27,6 @@ __all__ = ["port_frame", "march", "march_port", "save_march"]
 
 def port_frame(port: PortBuffers):
     """A :class:`vlref.render.Frame` whose G-buffer depth, scene colour and shadow maps are the port's."""
-    from ..geometry import build_geometry
-    from ..geometry.raycast import GBuffer
-    from ..lights import pack_lights
-    from ..render import Frame
-
     cam = port.camera
     dirs = cam.ray_directions()
     distance = cam.eye_depth_to_distance(port.depth, dirs)
@@ -55,9 +55,6 @@ def save_march(out_dir, port: PortBuffers, buffers: dict[str, np.ndarray], stage
     """Write ``buffers`` of :func:`march` as float32 EXRs into ``out_dir`` (all or nothing): ``FRAME_BUFFERS``
     and ``depth``, or with ``stages`` every image buffer (the first 3 channels of wider ones); each file's
     metadata holds the scene hash, the technique and the manifest's absolute path."""
-    from ..io import output_dir, write_exr
-    from ..render import scene_hash
-
     meta = {"scene_hash": scene_hash(port.scene), "technique": port.scene.render.technique,
             "port_manifest": str(Path(port.source).resolve())}
     with output_dir(out_dir) as tmp:

@@ -17,8 +17,11 @@ import numpy as np
 
 from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings
 from ..errors import InputError
+from ..io import read_image
+from ..scene import load_scene
 from ..scene.fields import F
 from ..scene.schema import build
+from ..tomlfile import read_toml
 from .decode import SHADOW_CONVENTIONS, PortShadowMap, PortTile, camera_from_matrices, decode_depth
 
 __all__ = ["PortManifest", "PortBuffers", "load_port", "bundled_name"]
@@ -137,8 +140,6 @@ class PortBuffers:
 
 def _read_single(path) -> np.ndarray:
     """The one-channel image at ``path`` as float64 (H, W)."""
-    from ..io import read_image
-
     return read_image(path, channels=1)[:, :, 0].astype(np.float64)
 
 
@@ -170,10 +171,6 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
 
     The scene is loaded with the manifest's ``set`` list, then the depth buffer's size, then ``overrides``.
     """
-    from ..io import read_image
-    from ..scene import load_scene
-    from ..tomlfile import read_toml
-
     path = Path(path)
     file = str(path)
     base = path.parent

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io import write_exr, write_text
+from ..render import render
 from .quadrature import ReferenceResult, render_reference
 
 __all__ = ["BiasReport", "technique_bias", "inscatter_error", "edge_mask", "error_concentration", "loglog_slope"]
@@ -71,7 +73,6 @@ class BiasReport:
         """``bias.json`` (the numbers) and ``bias_error.exr`` (per-pixel error at the first step count)."""
         import json
 
-        from ..io import write_exr, write_text
         out = Path(out_dir)
         write_text(out / "bias.json", json.dumps(self.to_dict(), indent=2, default=float))
         write_exr(out / "bias_error.exr", self.error.astype(np.float32))
@@ -139,8 +140,6 @@ def technique_bias(scene, technique: str, steps_list=(4, 8, 16, 32, 64), referen
 
     ``reference``: a precomputed :func:`render_reference` of the same scene (computed when None).
     """
-    from ..render import render
-
     ref = reference if reference is not None else render_reference(scene, rel_tol=rel_tol)
     rows, first, depth = [], None, None
     for steps in steps_list:

@@ -16,6 +16,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Optional
 
+from .animation import check_animation
 from .fields import F
 from .technique_params import TechniqueParams
 
@@ -314,7 +315,6 @@ class Scene:
         if not self.lights:
             return "lights", "a scene needs at least one light"
         if self.animation is not None:
-            from .animation import check_animation
             return check_animation(self)
         return None
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..camera import linear_to_raw, raw_to_linear
 from ..errors import InputError
+from ..io import read_image
 from ..lights.pack import F_DX, F_DZ
 from ..march.urp import urp_hash, urp_march
 from ..post.blur import urp_article_blur_pass
@@ -50,7 +51,6 @@ def has_main_light(scene) -> bool:
 def load_jitter(path: str, width: int, height: int, file: str = "<scene>") -> np.ndarray:
     """An injected hash buffer (.npy, or single-channel .exr), (height, width) in [0, 1), row 0 on top."""
     key = "techniques.urp.jitter_path"
-    from ..io import read_image
 
     try:
         a = read_image(path, channels=1)
