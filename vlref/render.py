@@ -18,7 +18,7 @@ With ``stages=True`` the technique's intermediate buffers and every shadow map a
 
 Temporal techniques (``froxel`` with ``temporal = true``) read the previous frame's state from
 ``render(..., history=)`` and return theirs as ``RenderResult.history`` (None for the others);
-:func:`vlref.animation.render_sequence` chains them over frames.
+:func:`vlref.sequence.render_sequence` chains them over frames.
 """
 
 from __future__ import annotations

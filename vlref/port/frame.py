@@ -22,7 +22,6 @@ from .manifest import PortBuffers, load_port
 from .shadows import shadow_maps_from_port
 
 __all__ = ["port_frame", "march", "march_port", "save_march"]
-"""Buffers :func:`save_march` writes without ``stages`` (besides ``depth``)."""
 
 
 def port_frame(port: PortBuffers):
