@@ -326,16 +326,16 @@ def _light_stage(s, n, lights, k):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
-    """The light leg ``T_l``, Beer–Lambert from the sample to the light (module docstring): 1 where
-    :func:`~vlref.medium.light_leg_attenuates` says so, the height fog's closed form, or
+def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
+    """The light leg ``T_l``, Beer–Lambert from the sample to the light (module docstring): 1 unless the leg
+    ``attenuates`` (:func:`~vlref.medium.light_leg_attenuates`), else the height fog's closed form or
     :func:`~vlref.medium.optical_depth`."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     zero, one = zero_one(s)
     st0 = mp[M_ST]
     bounded, noise = mp[M_BOUNDED] != zero, mp[M_NOISE] != zero
-    if not light_leg_attenuates(mp, kind == KIND_DIRECTIONAL, light_extinction):
+    if not attenuates:
         for m in range(n):
             set_lane(s, R_T_LIGHT, m, one)
     elif mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
@@ -450,6 +450,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
+    attenuates = light_leg_attenuates(medium.params, kind == KIND_DIRECTIONAL, light_extinction)
     n_geometric = 0
     for m in range(n):
         n_geometric += lane(s, R_GEOMETRIC, m) != 0.0
@@ -457,7 +458,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     for i in range(steps):
         _medium_stage(s, n, i, origin, medium, geometric)  # the medium: σs, σt, Beer–Lambert over the step
         _light_stage(s, n, lights, k)  # the light: its direction, attenuation, cone, colour, cookie
-        _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps)  # Beer–Lambert toward the light
+        _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps)  # Beer–Lambert toward the light
         _shadow_stage(s, q, taps, n, shadows, geo, lights, k)  # the shadow lookup
         _accumulate_stage(s, n, g)  # the phase function and the accumulation
     for m in range(n):
