@@ -69,8 +69,10 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   texels.
 * Lanes: each stage is a few loops over the lanes that read and write the packet's *scratch*, one row of
   ``LANES`` values per quantity (structure of arrays, rows ``R_*``; :func:`lane` / :func:`set_lane` and
-  the three-row :func:`lane3` / :func:`set_lane3` name them). The rows of one array at compile-time
-  constant offsets let LLVM see every row apart and vectorise without run-time alias checks.
+  the three-row :func:`lane3` / :func:`set_lane3` name them; Numba inlines them in its IR, ``inline="always"``,
+  so each is the plain ``scratch[R + m]`` to LLVM, with no call or reference count around it). The
+  rows of one array at compile-time constant offsets let LLVM see every row apart and vectorise without
+  run-time alias checks.
 * Vectorisation: a lane loop without table lookups or libm calls is vectorised by LLVM (4 lanes per AVX2
   instruction, 8 with AVX-512: every function of the march asks for the widest vectors,
   :func:`vlref.numeric.prefer_wide_vectors`, which LLVM's tuning for Intel's server cores would otherwise
@@ -156,25 +158,25 @@ Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LAN
 T_00, T_10, T_01, T_11 = range(0, 4 * LANES, LANES)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 def lane(scratch, row, m):
     """Lane ``m`` of ``row`` (an ``R_*``, ``Q_*`` or ``T_*`` offset) of a packet's scratch."""
     return scratch[row + m]
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 def set_lane(scratch, row, m, value):
     """Store ``value`` in lane ``m`` of ``row`` (in the scratch's type)."""
     scratch[row + m] = value
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 def lane3(scratch, row, m):
     """Lane ``m`` of the three rows from ``row``: a vector ``(x, y, z)`` or a colour ``(r, g, b)``."""
     return scratch[row + m], scratch[row + LANES + m], scratch[row + 2 * LANES + m]
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 def set_lane3(scratch, row, m, a, b, c):
     """Store ``(a, b, c)`` in lane ``m`` of the three rows from ``row``."""
     scratch[row + m] = a
@@ -182,7 +184,7 @@ def set_lane3(scratch, row, m, a, b, c):
     scratch[row + 2 * LANES + m] = c
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
 def scatters_light(ss, er, eg, eb):
     """The sample scatters light of this light: ``σs > 0`` and ``E_l ≠ 0`` (no shadow lookup elsewhere)."""
     zero = cast(ss, 0.0)
