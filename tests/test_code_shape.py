@@ -1,9 +1,11 @@
-"""The shape of the code: small signatures and named light kinds.
+"""The shape of the code: small signatures, named light kinds, named columns, imports at the top.
 
 Kernels take records (:class:`vlref.lights.pack.PackedLights`, :class:`vlref.medium.PackedMedium`,
 :class:`vlref.lights.shadowmaps.ShadowTable`, the geometry arrays) rather than long lists of positional
-arrays, and compare light kinds with the ``KIND_*`` constants of :mod:`vlref.lights.pack`, never with
-digits.
+arrays, compare light kinds with the ``KIND_*`` constants of :mod:`vlref.lights.pack`, never with
+digits, and read a record's columns by their names (``I_*``, ``F_*``, ``M_*``, ``S_*``), never by number.
+A module imports vlref's own modules at its top, where a reader sees its dependencies; a function imports
+only optional third-party packages (kept lazy so the core runs without them).
 """
 
 from __future__ import annotations
@@ -52,3 +54,68 @@ def test_light_kinds_are_compared_by_name():
     hits = [f"{path.relative_to(PACKAGE)}:{i}" for path in SOURCES
             for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if digit.search(line)]
     assert hits == []
+
+
+# the record tables and the names the kernels bind them to: 2-D (row, column) and 1-D (column) tables
+TABLES_2D = {"ints", "floats", "li", "lf", "sm_i", "sm_f"}
+TABLES_1D = {"params", "mp"}
+
+
+def _raw_columns(source: str) -> list[int]:
+    """Line numbers where a record table is indexed by a number in its column position."""
+    hits = []
+    for node in ast.walk(ast.parse(source)):
+        if not isinstance(node, ast.Subscript):
+            continue
+        v = node.value
+        name = v.attr if isinstance(v, ast.Attribute) else v.id if isinstance(v, ast.Name) else None
+        index = node.slice.elts if isinstance(node.slice, ast.Tuple) else [node.slice]
+        if name in TABLES_2D and len(index) == 2:
+            column = index[1]
+        elif name in TABLES_1D and len(index) == 1:
+            column = index[0]
+        else:
+            continue
+        if isinstance(column, ast.UnaryOp):
+            column = column.operand
+        if isinstance(column, ast.Constant) and isinstance(column.value, int):
+            hits.append(node.lineno)
+    return hits
+
+
+def test_columns_are_read_by_name_outside_the_packing_modules():
+    packing = {PACKAGE / "lights" / "pack.py", PACKAGE / "medium.py", PACKAGE / "lights" / "shadowmaps.py"}
+    hits = [f"{path.relative_to(PACKAGE)}:{line}" for path in SOURCES if path not in packing
+            for line in _raw_columns(path.read_text(encoding="utf-8"))]
+    assert hits == []
+
+
+def test_raw_column_check_sees_numbers_and_passes_names():
+    assert _raw_columns("x = lf[k, 3] + mp[0] + lights.ints[k, -1] + medium.params[2]") == [1, 1, 1, 1]
+    assert _raw_columns("x = lf[k, F_PX] + mp[M_ST] + lf[0] + rows[3] + lights.floats[k, F_DX]") == []
+
+
+def _local_own_imports(source: str) -> list[str]:
+    """``line: import`` of every import of vlref's own modules inside a function."""
+    hits = []
+    for fn in ast.walk(ast.parse(source)):
+        if isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            for node in ast.walk(fn):
+                own = (isinstance(node, ast.ImportFrom) and (node.level > 0 or (node.module or "").split(".")[0]
+                                                             == "vlref")
+                       or isinstance(node, ast.Import) and any(a.name.split(".")[0] == "vlref" for a in node.names))
+                if own:
+                    hits.append(f"{node.lineno}: {ast.unparse(node)}")
+    return hits
+
+
+def test_vlref_modules_are_imported_at_the_top_of_each_file():
+    hits = [f"{path.relative_to(PACKAGE)}:{hit}" for path in SOURCES
+            for hit in _local_own_imports(path.read_text(encoding="utf-8"))]
+    assert hits == []
+
+
+def test_local_import_check_sees_own_modules_and_passes_optional_packages():
+    src = ("def f():\n    from .io import write_exr\n    import vlref.render\n    from vlref import scene\n"
+           "def g():\n    import OpenEXR\n    from tqdm import tqdm\n")
+    assert [h.split(":")[0] for h in _local_own_imports(src)] == ["2", "3", "4"]

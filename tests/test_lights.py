@@ -7,12 +7,13 @@ import numpy as np
 import pytest
 
 from vlref.lights import pack_lights
-from vlref.lights.attenuation import INVERSE_SQUARE, MIN_DISTANCE, UNITY, WINDOWED, distance_attenuation
-from vlref.lights.cone import CONE_LINEAR, CONE_SMOOTHSTEP, CONE_UNITY, cone_falloff, default_inner_angle
+from vlref.lights.attenuation import (ATTENUATION_CODES, INVERSE_SQUARE, MIN_DISTANCE, UNITY, WINDOWED,
+                                     distance_attenuation)
+from vlref.lights.cone import CONE_CODES, CONE_LINEAR, CONE_SMOOTHSTEP, CONE_UNITY, cone_falloff, default_inner_angle
 from vlref.lights.cookies import load_cookie, sample_texture, spot_cookie_uv
-from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B
+from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B, I_ATT, I_CONE
 from vlref.lights.shading import light_incidence
-from vlref.scene.model import Cookie, Light, Scene
+from vlref.scene.model import ATTENUATIONS, CONE_LAWS, Cookie, Light, Scene
 
 NO_LUT = np.zeros((0, 0))
 R = 10.0
@@ -29,6 +30,29 @@ def test_attenuation_laws_match_formulas(d):
     assert distance_attenuation(UNITY, d2, inv, NO_LUT) == pytest.approx(folk * inside, rel=1e-14, abs=1e-300)
     win = min(max(1.0 - (d / R) ** 4, 0.0), 1.0) ** 2 * inv_sq
     assert distance_attenuation(WINDOWED, d2, inv, NO_LUT) == pytest.approx(win * inside, rel=1e-12, abs=1e-300)
+
+
+def test_every_distance_law_of_the_scene_model_has_its_own_code_and_curve():
+    """One list: the scene model's ATTENUATIONS numbered in order; a law named there without its own branch in
+    the kernels would fall through to another law's curve, and two equal curves fail here."""
+    assert list(ATTENUATION_CODES) == list(ATTENUATIONS)
+    assert sorted(ATTENUATION_CODES.values()) == list(range(len(ATTENUATIONS)))
+    d2 = np.linspace(0.0, 1.2, 25) * R * R
+    curves = {law: tuple(distance_attenuation(code, x, 1.0 / R ** 2, NO_LUT) for x in d2)
+              for law, code in ATTENUATION_CODES.items()}
+    assert len(set(curves.values())) == len(ATTENUATIONS)
+    packed = pack_lights(Scene(lights=tuple(Light(type="point", attenuation=law) for law in ATTENUATIONS)))
+    assert list(packed.ints[:, I_ATT]) == [ATTENUATION_CODES[law] for law in ATTENUATIONS]
+
+
+def test_every_cone_law_of_the_scene_model_has_its_own_code_and_curve():
+    assert list(CONE_CODES) == list(CONE_LAWS)
+    assert sorted(CONE_CODES.values()) == list(range(len(CONE_LAWS)))
+    cosines = np.cos(np.radians(np.linspace(0.0, 25.0, 26)))
+    curves = {law: tuple(_cone(code, c, 40.0, 24.0) for c in cosines) for law, code in CONE_CODES.items()}
+    assert len(set(curves.values())) == len(CONE_LAWS)
+    packed = pack_lights(Scene(lights=tuple(Light(type="spot", cone=law) for law in CONE_LAWS)))
+    assert list(packed.ints[:, I_CONE]) == [CONE_CODES[law] for law in CONE_LAWS]
 
 
 def test_unity_lut_is_sampled_bilinearly_with_clamp():

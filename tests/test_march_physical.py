@@ -12,6 +12,7 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
 from vlref.lights.shadowmaps import NSF, NSI, S_MODE, SHADOW_EXACT, ShadowMaps
+from vlref.march import physical as physical_march
 from vlref.march.physical import TILE_H, TILE_W, march_physical
 from vlref.medium import M_ST, pack_medium
 from vlref.phase import hg
@@ -352,3 +353,14 @@ def test_a_pixel_does_not_depend_on_its_packet(precision):
                            np.ascontiguousarray(t_end[i:i + 1, j:j + 1]),
                            np.ascontiguousarray(beta[i:i + 1, j:j + 1]), 8, *args, one, one_t)
             assert np.array_equal(one[:, 0, 0], per[:, i, j]) and one_t[0, 0] == trans[i, j], (i, j)
+
+
+def test_the_packet_scratch_rows_tile_the_scratch_without_overlap():
+    """Each named row of the march's scratch (a vector or colour row takes three) is its own: the rows of
+    vlref.march.physical tile [0, ROWS·LANES) exactly, so no stage overwrites another quantity's lanes."""
+    triple = {"R_DIR", "R_POS", "R_TO_LIGHT", "R_E_RGB", "R_VIS", "R_L"}
+    rows = {name: getattr(physical_march, name) for name in dir(physical_march) if name.startswith("R_")}
+    assert triple <= set(rows)
+    lanes = physical_march.LANES
+    cells = sorted(off + k * lanes for name, off in rows.items() for k in range(3 if name in triple else 1))
+    assert cells == list(range(0, physical_march.ROWS * lanes, lanes))

@@ -1,4 +1,5 @@
-"""The participating medium: density, and optical depth along a segment.
+"""The participating medium: density, optical depth along a segment, and the two Beer–Lambert rules the
+marches share.
 
 ``σs(x) = scattering · ρ(x)``, ``σt(x) = (scattering + absorption) · ρ(x)`` (1/m) with the density factor
 
@@ -22,6 +23,18 @@ Optical depth ``τ(t0, t1) = ∫ σt(o + t d) dt`` (:func:`optical_depth`): the 
 the box; without noise it is analytic (homogeneous ``σt · L``; height fog in closed form
 ``σt · L · e^m · (1 - e^-|Δ|)/|Δ|`` with ``e_a, e_b`` the fog exponents at the ends, ``m = max``,
 ``Δ = e_a - e_b``); with noise it is the midpoint rule with ``n_sub`` sub-steps.
+
+The Beer–Lambert rules every march applies (the physical march, :mod:`vlref.march.physical`, and the froxel
+passes, :mod:`vlref.froxel.kernels`), each written once:
+
+* :func:`step_source_weight`: over a step of length ``Δ`` where ``σt`` is constant, a constant source ``S``
+  adds ``S ∫_0^Δ e^{-σt s} ds = S (1 - e^{-σt Δ})/σt`` (``S Δ`` where ``σt = 0``) under the transmittance
+  at the step's start (Hillaire 2015, "energy-conserving" integration);
+* :func:`light_leg_attenuates`: the light leg ``T_l`` (sample → light) is ``exp(-τ)`` when
+  ``light_extinction`` is on and the medium extinguishes at all, except for a directional light in an
+  unbounded medium, where ``T_l = 1`` (its irradiance is the irradiance arriving at the sample: an
+  infinite medium would otherwise extinguish it completely; ``medium.bounds`` attenuates sunlight on its
+  way in).
 """
 
 from __future__ import annotations
@@ -37,7 +50,8 @@ from .numeric import cast, exp, expm1
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
            "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
-           "fog_depth_ratio", "in_bounds", "box_contains", "FOG_MAX_EXPONENT"]
+           "fog_depth_ratio", "in_bounds", "box_contains", "step_source_weight", "light_leg_attenuates",
+           "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
@@ -244,3 +258,21 @@ def optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, t0, t1, n_sub):
         t = a + (cast(ox, i) + cast(ox, 0.5)) * h
         acc += density(mp, lattice, ox + t * dx, oy + t * dy, oz + t * dz)
     return mp[M_ST] * acc * h
+
+
+# ---------------------------------------------------------------------------------------------- Beer–Lambert rules
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def step_source_weight(st, delta, em1):
+    """``∫_0^Δ e^{-σt s} ds = (1 - e^{-σt Δ})/σt`` (``Δ`` where ``σt = 0``), the weight of a source constant
+    over a step of length ``delta`` (module docstring). ``em1 = expm1(-σt Δ)``, which the caller computes (it
+    also needs ``e^{-σt Δ} = 1 + em1`` for the transmittance update); any float type, kept."""
+    return delta if st == 0.0 else -em1 / st
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def light_leg_attenuates(mp, directional, light_extinction):
+    """Whether the light leg ``T_l`` of a sample is ``exp(-τ)`` (True) or 1 (module docstring): the medium
+    ``mp`` extinguishes, ``light_extinction`` is on, and the light is not ``directional`` in an unbounded
+    medium."""
+    return light_extinction and mp[M_ST] != 0.0 and not (directional and mp[M_BOUNDED] == 0.0)

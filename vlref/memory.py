@@ -23,6 +23,7 @@ from typing import Sequence
 
 from .errors import InputError
 from .scene.load import parse_override
+from .techniques import TECHNIQUES
 
 __all__ = ["MemoryEstimate", "estimate", "available_bytes", "check_memory"]
 
@@ -53,8 +54,6 @@ def _faces(light) -> int:
 
 def estimate(scene) -> MemoryEstimate:
     """The peak memory of ``render(scene)`` (module docstring), in bytes."""
-    from .techniques import TECHNIQUES
-
     r = scene.render
     frame = float(r.width) * r.height * TECHNIQUES[r.technique].bytes_per_pixel
     maps = [(i, float(_faces(l)) * l.shadows.resolution ** 2 * SHADOW_BYTES_PER_TEXEL[l.type])

@@ -53,7 +53,10 @@ import numpy as np
 
 from .errors import InputError
 from .io import srgb8, write_exr
-from .render import Frame, prepare_frame
+from .lights import pack_lights
+from .lights.shading import scene_colour
+from .render import Frame, prepare_frame, render
+from .scene import load_scene
 from .techniques import TECHNIQUES
 
 __all__ = ["auto_exposure", "display_rgb", "display_scalar", "display_buffer", "plot_images", "Slider", "Choice",
@@ -300,9 +303,6 @@ class PreviewRenderer:
 
     def frame(self, scene) -> Frame:
         """A frame valid for ``scene``, reusing what the previous scene built."""
-        from .lights import pack_lights
-        from .lights.shading import scene_colour
-
         old = self._frame
         if old is None or _frame_key(old.scene) != _frame_key(scene):
             self._frame = prepare_frame(scene)
@@ -365,9 +365,6 @@ def make_port_example(out_dir, scene: str = "pillars", width: int = 160, height:
 
     Returns the written paths by key of :data:`EXAMPLE_FILES`.
     """
-    from .render import render
-    from .scene import load_scene
-
     base = [f"render.width={width}", f"render.height={height}", "render.technique=\"physical\"",
             f"render.steps={steps}", "render.sampling=\"none\"", *overrides]
     ref_scene = load_scene(scene, base)

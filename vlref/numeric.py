@@ -1,5 +1,5 @@
-"""Numeric helpers shared by the kernels: the float-type helper :func:`cast`, and :func:`exp` / :func:`expm1`
-written out so that LLVM can vectorise the loops that call them.
+"""Numeric helpers shared by the kernels: the float-type helpers :func:`cast` and :func:`zero_one`, and
+:func:`exp` / :func:`expm1` written out so that LLVM can vectorise the loops that call them.
 
 ``exp`` and ``expm1`` (float64 arithmetic; a float32 argument gives the float32 rounding of the float64 value):
 the argument is reduced as ``x = n ln2 + r``, ``n = round(x / ln2)``, ``|r| <= ln2/2``, with ``ln2`` split in
@@ -31,7 +31,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, overload
 
-__all__ = ["cast", "exp", "expm1", "fma", "prefer_wide_vectors"]
+__all__ = ["cast", "zero_one", "exp", "expm1", "fma", "prefer_wide_vectors"]
 
 
 def cast(like, value):
@@ -48,6 +48,26 @@ def _cast_impl(like, value):
     if like == types.float32:
         return lambda like, value: np.float32(value)
     return lambda like, value: np.float64(value)
+
+
+def zero_one(like):
+    """``(0, 1)`` in the float type of the array ``like``; inside njit code float32 stays float32.
+
+    The one way a kernel compiled for float64 and float32 inputs names its precision: ``zero, one =
+    zero_one(buffer)`` from the array it computes in, then ``cast(one, value)`` for any other constant
+    (never a witness element such as ``table[0, 0]``, which an empty table would not have).
+    """
+    t = np.asarray(like).dtype.type
+    return t(0.0), t(1.0)
+
+
+@overload(zero_one)
+def _zero_one_impl(like):
+    if not isinstance(like, types.Array) or not isinstance(like.dtype, types.Float):
+        return None
+    if like.dtype == types.float32:
+        return lambda like: (np.float32(0.0), np.float32(1.0))
+    return lambda like: (np.float64(0.0), np.float64(1.0))
 
 
 @intrinsic

@@ -18,7 +18,7 @@ With ``stages=True`` the technique's intermediate buffers and every shadow map a
 
 Temporal techniques (``froxel`` with ``temporal = true``) read the previous frame's state from
 ``render(..., history=)`` and return theirs as ``RenderResult.history`` (None for the others);
-:func:`vlref.animation.render_sequence` chains them over frames.
+:func:`vlref.sequence.render_sequence` chains them over frames.
 """
 
 from __future__ import annotations
@@ -35,6 +35,10 @@ import numpy as np
 
 from . import __version__
 from .camera import Camera, camera_from_settings
+from .geometry import build_geometry, raycast
+from .lights import pack_lights
+from .lights.shading import scene_colour
+from .lights.shadowmaps import build_shadow_maps
 from .scene.animation import scene_at
 from .scene.model import Scene
 from .techniques import APPLIES, FRAME_BUFFERS, TECHNIQUES, suitable_scenes
@@ -97,7 +101,6 @@ class Frame:
         techniques fix the filter their source uses (Vos and VolumetricLights: one point sample).
         """
         if shadow_filter not in self.shadow_cache:
-            from .lights.shadowmaps import build_shadow_maps
             maps = None if shadow_filter is None else self.shadow_maps().with_filter(shadow_filter)
             if maps is None:
                 scene = self.scene
@@ -125,10 +128,6 @@ class RenderResult:
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
     """Camera, geometry, G-buffer, packed lights and scene colour of ``scene`` at its ``render.frame``
     (:func:`vlref.scene.animation.scene_at`; ``Frame.scene`` is the evaluated scene)."""
-    from .geometry import build_geometry, raycast
-    from .lights import pack_lights
-    from .lights.shading import scene_colour
-
     tick = tick or (lambda name: None)
     scene = scene_at(scene)
     camera = camera_from_settings(scene.camera, scene.render.width, scene.render.height)

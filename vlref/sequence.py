@@ -23,6 +23,8 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from .errors import InputError
+from .io import save_buffers, srgb8, write_bytes, write_png
+from .render import render
 
 __all__ = ["parse_frames", "render_sequence", "write_sequence", "preview_gif", "write_mp4"]
 
@@ -50,8 +52,6 @@ def parse_frames(text: str, scene) -> range:
 def render_sequence(scene, frames: Sequence[int], stages: bool = False,
                     progress: Callable[[str], None] | None = None) -> Iterator[tuple[int, object]]:
     """Yield ``(frame, RenderResult)`` for each frame in order, each frame given the previous one's history."""
-    from .render import render
-
     history = None
     for f in frames:
         s = scene.replace(render=dataclasses.replace(scene.render, frame=int(f)))
@@ -88,8 +88,6 @@ def write_sequence(out_dir: Path, scene, frames: Sequence[int], stages: bool, ma
                    progress: Callable[[str], None] | None = None, on_frame: Callable[[int], None] | None = None
                    ) -> list[Path]:
     """Render and write ``frames`` of ``scene`` into the existing folder ``out_dir`` (module docstring)."""
-    from .io import save_buffers, srgb8, write_bytes, write_png
-
     fps = scene.animation.fps if scene.animation is not None else 24.0
     paths, previews = [], []
     for f, result in render_sequence(scene, frames, stages, progress):

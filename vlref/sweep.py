@@ -46,7 +46,17 @@ from pathlib import Path
 
 import numpy as np
 
+from .cluster import After, Item, run_items
 from .errors import InputError
+from .io import output_dir, write_bytes, write_exr, write_text
+from .oracle.metrics import hdr_flip
+from .reference import render_reference
+from .reference.bias import inscatter_error
+from .render import render, scene_hash
+from .scene import load_scene
+from .scene.load import parse_override
+from .scene.model import TECHNIQUES
+from .tomlfile import read_toml
 
 __all__ = ["SweepSpec", "load_sweep", "sweep_items", "run_sweep", "METRICS"]
 
@@ -76,10 +86,6 @@ def _strings(value, file: str, key: str) -> tuple[str, ...]:
 
 def load_sweep(path) -> SweepSpec:
     """Read and check a sweep file (module docstring); :class:`InputError` names the bad key."""
-    from .scene.load import parse_override
-    from .scene.model import TECHNIQUES
-    from .tomlfile import read_toml
-
     path = Path(path)
     file = str(path)
     data = read_toml(path, "sweep file")
@@ -136,18 +142,12 @@ def _reference_scene(scene, base):
 
 def _reference(scene, rel_tol: float) -> dict:
     """Item: the reference's inscatter and final image and its error bound."""
-    from .reference import render_reference
-
     ref = render_reference(scene, rel_tol=rel_tol)
     return {"inscatter": ref.inscatter, "final": ref.final, "max_error": ref.max_error}
 
 
 def _point(scene, reference: dict, metrics: tuple[str, ...]) -> dict:
     """Item: render ``scene``; its inscatter, the metric values (module docstring) and its render time."""
-    from .oracle.metrics import hdr_flip
-    from .reference.bias import inscatter_error
-    from .render import render
-
     result = render(scene)
     values = {}
     if "error" in metrics:
@@ -163,11 +163,6 @@ def sweep_items(spec: SweepSpec):
     """``(items, rows)``: the reference and point items (:class:`vlref.cluster.Item`) and, per point item,
     its summary row without metric values. Every scene is loaded here, so bad overrides fail before any
     work (``InputError`` naming the sweep file and the point)."""
-    from .cluster import After, Item
-    from .render import scene_hash
-    from .scene import load_scene
-    from .scene.load import parse_override
-
     base = load_scene(spec.scene, spec.base)
     techniques = spec.techniques or (base.render.technique,)
     references: dict[str, str] = {}
@@ -219,9 +214,6 @@ def _parquet(rows: list[dict], columns: list[str]) -> bytes | None:
 def run_sweep(spec: SweepSpec, output, scheduler: str | None = None, quiet: bool = False) -> list[dict]:
     """Run the sweep on ``scheduler`` (:func:`vlref.cluster.run_items`) into ``output``; returns the summary
     rows (dicts with the columns of ``summary.csv``, metric values as numbers)."""
-    from .cluster import run_items
-    from .io import output_dir, write_bytes, write_exr, write_text
-
     items, rows = sweep_items(spec)
     by_item = {row["item"]: row for row in rows}
     seconds: dict[str, float] = {}

@@ -39,7 +39,18 @@ from typing import Callable, Iterator
 
 import numpy as np
 
+from .camera import camera_from_settings
+from .geometry import build_geometry
+from .lights import pack_lights
+from .lights.shadowmaps import build_shadow_maps
+from .march.physical import march_physical
 from .processes import ignoring_sigint
+from .reference import render_reference
+from .render import prepare_frame, render
+from .scene import load_scene
+from .sequence import render_sequence
+from .techniques import resolved
+from .techniques.physical import march_buffers
 
 __all__ = ["TASKS", "warmup", "march_ahead", "compile_march", "march_cached"]
 
@@ -68,24 +79,18 @@ TASKS: dict[str, tuple[str, str | None, list[str]]] = {
 def run_task(name: str) -> tuple[str, float]:
     """Compile (or load) the kernels of task ``name`` in this process; ``(name, seconds)``. A failure is
     raised as ``RuntimeError(message)`` (worker results must unpickle in the parent)."""
-    from .scene import load_scene
-
     start = time.perf_counter()
     what, scene_name, overrides = TASKS[name]
     try:
         scene = load_scene(scene_name, TINY + overrides)
         if what == "frame":
-            from .render import prepare_frame
             prepare_frame(scene).shadow_maps()
         elif what == "sequence":
-            from .sequence import render_sequence
             for _ in render_sequence(scene, range(2)):
                 pass
         elif what == "reference":
-            from .reference import render_reference
             render_reference(scene, rel_tol=1e-2, shadow_samples=8)
         else:
-            from .render import render
             render(scene)
     except Exception as exc:
         raise RuntimeError(f"warmup task {name!r}: {exc}") from None
@@ -133,11 +138,6 @@ def _kernel_frame(scene):
     (empty geometry arrays), no shadow maps (empty tables; ``exact`` shadows are kept, they need no map),
     the sky at every pixel. Every array has the dtype, rank and layout of the full frame's, so the march
     compiled for it serves the real frame."""
-    from .camera import camera_from_settings
-    from .geometry import build_geometry
-    from .lights import pack_lights
-    from .lights.shadowmaps import build_shadow_maps
-
     def bare_light(light):  # exact shadows are kept: they need no map, and choose the kernel's variant
         return light if _exact(light) else dataclasses.replace(light, shadows=None)
 
@@ -151,9 +151,6 @@ def _kernel_frame(scene):
 
 def compile_march(scene) -> None:
     """Compile (or load) the physical march for ``scene``'s types on its 1×1 kernel frame (module docstring)."""
-    from .techniques import resolved
-    from .techniques.physical import march_buffers
-
     bare, camera, lights, maps, geo = _kernel_frame(scene)
     march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geo, resolved(scene, "steps"),
                   resolved(scene, "sampling"))
@@ -163,8 +160,6 @@ def march_cached(scene) -> bool:
     """Whether Numba's cache holds the physical march for ``scene``'s precision and shadow-ray variant (its
     index, read without compiling). False when the index cannot be read."""
     import numba
-
-    from .march.physical import march_physical
 
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     rays = any(_exact(light) for light in scene.lights)

@@ -12,7 +12,7 @@ HG phase, extinction on the view ray and on the light leg, homogeneous medium ti
 
 with ``T`` starting at ``exp(-τ(0, a))`` and ``τ`` the closed-form height-fog optical depth of
 :func:`vlref.medium.optical_depth`. The segment ``[a, b]`` of each ray inside the cone comes from
-:func:`light_segments` (the njit :func:`vlref.march.physical.light_segment`, per pixel): it is
+:func:`light_segments` (the njit :func:`vlref.march.segments.light_segment`, per pixel): it is
 not per-sample work. The result equals the kernel's to rounding (tests/test_bench.py checks it),
 so the samples/s ratio compares the same computation.
 """

@@ -12,8 +12,14 @@ from numba import njit, prange
 
 from ..lights.pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY,
                            F_UZ)
+from ..lights.shadowmaps import S_OFFSET, S_RES
+from ..march.patterns import offsets
 from ..march.segments import light_segment
+from ..medium import pack_medium
+from ..render import prepare_frame
 from ..scene.model import Scene
+from ..techniques import physical, resolved
+from .baseline import light_segments, march_spot_numpy
 from .ceiling import bench_ceiling
 from .config import THREADS, BenchConfig, bench_scene, median_time
 
@@ -44,9 +50,6 @@ def march_samples(scene: Scene, frame) -> int:
 
 
 def _time_march(scene: Scene, repeats: int) -> dict:
-    from ..render import prepare_frame
-    from ..techniques import physical
-
     frame = prepare_frame(scene)
     frame.shadow_maps()
     seconds = median_time(lambda: physical.render(scene, frame), repeats)
@@ -103,8 +106,6 @@ def plain_march(origin, dirs, seg, steps, sigma_t, lf, data, base, res, out):
 def _one_spot_frame(cfg: BenchConfig, width: int, height: int):
     """Scene (a) at ``width x height`` and what the hand-written marches take: ``(scene, frame, shadow maps,
     ray directions, segment ends, light floats (float64), camera origin)``."""
-    from ..render import prepare_frame
-
     scene = bench_scene(width, height, cfg.steps, "one", cfg.shadow_resolution)
     frame = prepare_frame(scene)
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
@@ -115,9 +116,6 @@ def _one_spot_frame(cfg: BenchConfig, width: int, height: int):
 
 def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict:
     """Samples/s of :func:`plain_march` on (a) at ``width x height`` with ``threads`` Numba threads."""
-    from .baseline import light_segments
-    from ..lights.shadowmaps import S_OFFSET, S_RES
-
     scene, frame, sm, dirs, t_end, lf, origin = _one_spot_frame(cfg, width, height)
     seg = np.empty((1, height, width, 2))
     light_segments(frame.lights._replace(floats=lf), origin, dirs, t_end, seg)
@@ -136,12 +134,6 @@ def _plain_rate(cfg: BenchConfig, width: int, height: int, threads: int) -> dict
 
 def bench_baseline(cfg: BenchConfig, march: dict, scaling: dict) -> dict:
     """The NumPy baseline of (a) at ``cfg.baseline``, checked against the kernel's result (same size)."""
-    from .baseline import light_segments, march_spot_numpy
-    from ..march.patterns import offsets
-    from ..medium import pack_medium
-    from ..techniques import resolved
-    from ..techniques import physical
-
     w, h = cfg.baseline
     scene, frame, sm, dirs, t_end, lf, origin = _one_spot_frame(cfg, w, h)
     beta = offsets(resolved(scene, "sampling"), w, h, scene.render.seed)

@@ -13,14 +13,14 @@ from pathlib import Path
 
 import numba
 
+from ..reference import render_reference
+from ..render import render
 from .config import BenchConfig, bench_scene
 
 __all__ = ["bench_reference", "bench_first_render", "bench_memory", "bench_whole_render"]
 
 
 def bench_reference(cfg: BenchConfig) -> dict:
-    from ..reference import render_reference
-
     w, h = cfg.reference
     scene = bench_scene(w, h, cfg.steps, "one", cfg.shadow_resolution)
     render_reference(bench_scene(2, 1, cfg.steps, "one", cfg.shadow_resolution), rel_tol=1e-4)  # JIT warm-up
@@ -121,8 +121,6 @@ def bench_first_render(cfg: BenchConfig) -> dict:
 
 
 def bench_memory(cfg: BenchConfig) -> dict:
-    from ..render import render
-
     scene = bench_scene(cfg.width, cfg.height, cfg.memory_steps, "four", cfg.shadow_resolution)
     render(scene)  # JIT warm-up: compiling allocates too
     tracemalloc.start()

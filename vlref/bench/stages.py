@@ -7,6 +7,18 @@ import dataclasses
 
 import numpy as np
 
+from ..camera import camera_from_settings
+from ..geometry import build_geometry, raycast
+from ..lights import pack_lights
+from ..lights.shadowmaps import build_shadow_maps
+from ..notebook import PreviewRenderer
+from ..post.blur import blur_hv, thesis_blur_pass
+from ..post.composite import composite_physical
+from ..post.downsample import downsample_min
+from ..post.radial import radial_blur
+from ..post.upsample import thesis_upsample, urp_upsample, vl_upsample
+from ..render import render
+from ..scene import load_scene
 from .config import BenchConfig, bench_scene, median_time
 
 __all__ = ["bench_geometry", "bench_post"]
@@ -14,12 +26,6 @@ __all__ = ["bench_geometry", "bench_post"]
 
 def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
     """Raycast (primary rays/s) and shadow maps (texels/s) of (b), plus the bundled scenes."""
-    from ..camera import camera_from_settings
-    from ..geometry import build_geometry, raycast
-    from ..lights import pack_lights
-    from ..lights.shadowmaps import build_shadow_maps
-    from ..scene import load_scene
-
     def measure(scene):
         cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
         geo = build_geometry(scene)
@@ -40,14 +46,6 @@ def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
 
 def bench_post(cfg: BenchConfig) -> dict:
     """Each post pass at ``cfg.width x cfg.height`` (half-resolution inputs where the pass takes them)."""
-    from ..post.blur import blur_hv, thesis_blur_pass
-    from ..post.composite import composite_physical
-    from ..post.downsample import downsample_min
-    from ..post.radial import radial_blur
-    from ..post.upsample import thesis_upsample, urp_upsample, vl_upsample
-    from ..notebook import PreviewRenderer
-    from ..render import render
-
     h, w = cfg.height, cfg.width
     rng = np.random.default_rng(0)
     depth = rng.uniform(1.0, 30.0, size=(h, w))

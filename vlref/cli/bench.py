@@ -9,6 +9,9 @@ import json
 import sys
 from pathlib import Path
 
+from ..bench import FULL, QUICK, format_report, run_bench
+from ..io import check_output_file
+
 HELP = "benchmarks (--quick, --json)"
 
 
@@ -22,9 +25,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..bench import FULL, QUICK, format_report, run_bench
-    from ..io import check_output_file
-
     if args.output:
         check_output_file(args.output)
     cfg = QUICK if args.quick else FULL

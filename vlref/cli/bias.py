@@ -6,6 +6,8 @@ import argparse
 
 from pathlib import Path
 
+from ..io import output_dir
+from ..reference.bias import DEFAULT_STEPS, technique_bias
 from .options import add_scene_arguments, load_scene_checked, technique_names, technique_rules
 from .progress_bar import StageBar
 
@@ -23,9 +25,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import output_dir
-    from ..reference.bias import DEFAULT_STEPS, technique_bias
-
     scene = load_scene_checked(args)
     steps = tuple(int(s) for s in args.steps.split(",")) if args.steps else DEFAULT_STEPS
     # the reference's 3 frame stages and its quadrature, then one render per step count

@@ -9,6 +9,9 @@ from pathlib import Path
 from typing import Sequence
 
 from ..errors import InputError
+from ..io import check_output_dir
+from ..oracle.compare import compare_files
+from ..oracle.metrics import FLIP_MISSING
 
 HELP = "compare two images (exit 0 pass, 1 fail, 2 bad input)"
 CLI = "<command line>"
@@ -67,10 +70,6 @@ def _parse_set(items: Sequence[str] | None) -> dict[str, str]:
 
 def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
-    from ..io import check_output_dir
-    from ..oracle.compare import compare_files
-    from ..oracle.metrics import FLIP_MISSING
-
     if args.output:
         check_output_dir(args.output)
     _refuse_8bit(args)

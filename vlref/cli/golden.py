@@ -8,7 +8,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..oracle.golden import SUITE_FILE
+from ..io import check_output_dir
+from ..oracle.golden import (SUITE_FILE, build, build_dir, find_golden_dir, load_suite, select_entries, suite_entries,
+                             verify)
 from .options import add_scheduler_argument
 
 HELP = "build or verify the golden suite"
@@ -31,9 +33,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import check_output_dir
-    from ..oracle.golden import build, build_dir, find_golden_dir, load_suite, select_entries, suite_entries, verify
-
     log = (lambda *a, **k: None) if args.quiet else tqdm.write  # lines above the items' progress bar
     start = time.perf_counter()
     if args.action == "list":

@@ -8,6 +8,8 @@ import sys
 import time
 from pathlib import Path
 
+from ..io import check_output_dir
+from ..port import load_port, march_sequence, save_march
 from .progress_bar import StageBar
 
 HELP = "march and post passes on a port's own buffers"
@@ -27,9 +29,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import check_output_dir
-    from ..port import load_port, march_sequence, save_march
-
     start = time.perf_counter()
     check_output_dir(args.output)
     ports = [load_port(m, args.set or ()) for m in args.manifest]

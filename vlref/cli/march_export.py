@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..io import check_output_dir
+from ..port import export_port
+
 HELP = None  # listed under ``vlref march``
 
 
@@ -31,9 +34,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import check_output_dir
-    from ..port import export_port
-
     depth_enc, _, depth_conv = args.depth.partition(":")
     shadow_enc, _, shadow_conv = args.shadow.partition(":")
     check_output_dir(args.output)

@@ -4,19 +4,24 @@ from __future__ import annotations
 
 import argparse
 
+from ..io import check_output_dir, luminance, percentile_exposure
+from ..memory import check_memory
+from ..scene import load_scene
+from ..scene.model import TECHNIQUES
+from ..techniques import APPLIES
+from ..techniques.urp import main_light
+
 __all__ = ["add_scene_arguments", "add_scheduler_argument", "technique_names", "load_scene_checked",
            "preview_exposure"]
 
 
 def technique_names() -> str:
     """The techniques, comma-separated, for help texts."""
-    from ..scene.model import TECHNIQUES
     return ", ".join(TECHNIQUES)
 
 
 def technique_rules() -> str:
     """Which scenes the techniques apply to, for help texts: each rule that is not 'every scene'."""
-    from ..techniques import APPLIES
     return "; ".join(f"{n} applies to {rule}" for n, rule in APPLIES.items() if rule != "every scene") + \
         " (`vlref scenes` lists the techniques of each bundled scene)"
 
@@ -48,11 +53,6 @@ def add_scheduler_argument(p: argparse.ArgumentParser) -> None:
 def load_scene_checked(args):
     """The scene of ``args`` with its overrides; the output folder, the memory estimate (unless
     ``--ignore-memory-check``) and the main light ``urp`` needs are checked first (before any work)."""
-    from ..io import check_output_dir
-    from ..memory import check_memory
-    from ..scene import load_scene
-    from ..techniques.urp import main_light
-
     if getattr(args, "output", None):
         check_output_dir(args.output)
     overrides = list(args.set or [])
@@ -69,8 +69,6 @@ def load_scene_checked(args):
 def preview_exposure(scene, image) -> tuple[float, dict[str, str], str]:
     """The PNG preview's exposure ``render.exposure x 1/p``, ``p`` the ``render.auto_exposure`` percentile of
     ``image``'s luminance (``render.exposure`` alone when that is 0); its PNG tEXt and a summary phrase."""
-    from ..io import luminance, percentile_exposure
-
     r = scene.render
     if r.auto_exposure <= 0.0:
         rule = f"render.exposure {r.exposure:g}"

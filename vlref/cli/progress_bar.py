@@ -5,6 +5,8 @@ from __future__ import annotations
 import contextlib
 import sys
 
+from ..progress import reporting
+
 __all__ = ["StageBar"]
 
 
@@ -54,7 +56,6 @@ class StageBar:
     def __enter__(self):
         from numba.core.event import install_listener
 
-        from ..progress import reporting
         self.said_compiling = False
         self._listening = contextlib.ExitStack()
         self._listening.enter_context(reporting(self.rows))

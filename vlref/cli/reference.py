@@ -6,6 +6,10 @@ import argparse
 from pathlib import Path
 
 from .. import __version__
+from ..io import output_dir, write_exr, write_png
+from ..reference import render_reference
+from ..reference.tiles import render_reference_tiled
+from ..render import scene_hash
 from .options import add_scene_arguments, add_scheduler_argument, load_scene_checked, preview_exposure
 from .progress_bar import StageBar
 
@@ -26,13 +30,8 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import output_dir, write_exr, write_png
-    from ..reference import render_reference
-    from ..render import scene_hash
-
     scene = load_scene_checked(args)
     if args.scheduler:  # the cluster's own bar counts the tiles
-        from ..reference.tiles import render_reference_tiled
         res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows)
     else:
         with StageBar(False, 4, f"reference {Path(scene.source).stem}") as bar:  # 3 frame stages, then the quadrature

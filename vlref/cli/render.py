@@ -9,6 +9,12 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
+from ..io import output_dir, png_bytes, save_render, srgb8, write_bytes
+from ..render import render
+from ..sequence import parse_frames, write_sequence
+from ..sheet import contact_sheet, inscatter_level, labelled
+from ..techniques import TECHNIQUES
+from ..warmup import march_ahead
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names, technique_rules
 from .progress_bar import StageBar
 
@@ -45,10 +51,6 @@ def render_to_folder(scene, output, stages: bool = False, half_float: bool = Fal
     (all or nothing). Returns ``(result, phrase, write_seconds, kept)``: the render, the preview-exposure phrase,
     the time from the end of the render to the files in place (exposure, EXR, PNG), and the files of an earlier
     run that ``output`` still holds (this run did not write them)."""
-    from ..io import output_dir, save_render
-    from ..render import render
-    from ..warmup import march_ahead
-
     # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
     with StageBar(quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
         def stage(name: str) -> None:
@@ -92,9 +94,6 @@ def run(args) -> int:
 
 def _render_frames(args, scene) -> int:
     """``vlref render --frames A:B``: a numbered EXR sequence and previews (:mod:`vlref.sequence`)."""
-    from ..io import output_dir
-    from ..sequence import parse_frames, write_sequence
-
     frames = parse_frames(args.frames, scene)
     earlier = _files(args.output)
     if scene.animation is None and not args.quiet:
@@ -114,11 +113,6 @@ def _render_frames(args, scene) -> int:
 
 def _render_all(args, scene) -> int:
     """``vlref render SCENE --technique all``: every technique that applies, one exposure (:mod:`vlref.sheet`)."""
-    from ..io import output_dir, png_bytes, save_render, srgb8, write_bytes
-    from ..render import render
-    from ..sheet import contact_sheet, inscatter_level, labelled
-    from ..techniques import TECHNIQUES
-
     names = [name for name, t in TECHNIQUES.items() if t.applies(scene)]
     results = {}
     with StageBar(args.quiet, len(names), f"render {Path(scene.source).stem}", "technique") as bar:

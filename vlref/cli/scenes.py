@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import argparse
 
+from ..scene import bundled_scenes, load_scene
+from ..techniques import TECHNIQUES
+
 HELP = "list the bundled scenes and the techniques that apply to each"
 
 
@@ -12,9 +15,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..scene import bundled_scenes, load_scene
-    from ..techniques import TECHNIQUES
-
     for name, path in bundled_scenes().items():
         scene = load_scene(path)
         applies = [t.name for t in TECHNIQUES.values() if t.applies(scene)]

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 import sys
 
+from ..io import check_output_dir
+from ..sweep import load_sweep, run_sweep
 from .options import add_scheduler_argument
 
 HELP = "a technique x parameter grid against the reference (error, time, FLIP)"
@@ -20,9 +22,6 @@ def parser() -> argparse.ArgumentParser:
 
 
 def run(args) -> int:
-    from ..io import check_output_dir
-    from ..sweep import load_sweep, run_sweep
-
     check_output_dir(args.output)
     spec = load_sweep(args.spec)
     rows = run_sweep(spec, args.output, scheduler=args.scheduler, quiet=args.quiet)

@@ -7,6 +7,9 @@ import argparse
 import sys
 from pathlib import Path
 
+from ..io import check_output_dir
+from ..oracle.verdict import judge
+
 HELP = "judge a port on its own buffers and against the scene (exit 0 pass, 1 fail, 2 bad input)"
 
 
@@ -27,9 +30,6 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
-    from ..io import check_output_dir
-    from ..oracle.verdict import judge
-
     if args.output:
         check_output_dir(args.output)
     verdict = judge(args.manifest, args.output, args.preset, args.set or ())

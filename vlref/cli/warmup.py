@@ -6,6 +6,8 @@ import argparse
 import sys
 import time
 
+from ..warmup import TASKS, cache_location, warmup
+
 HELP = "compile every kernel once (later first renders start at once)"
 
 
@@ -18,8 +20,6 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args) -> int:
     from tqdm import tqdm
-
-    from ..warmup import TASKS, cache_location, warmup
 
     start = time.perf_counter()
     with tqdm(total=len(TASKS), desc="vlref warmup", unit="group", file=sys.stderr, leave=False) as bar:

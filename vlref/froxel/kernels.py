@@ -9,10 +9,11 @@ Grid layout and slices: :mod:`vlref.froxel.grid`. Every kernel runs ``prange`` o
    ``S = σs(x) Σ_l p(d·l) V_l(x) T_l(x) E_l(x)`` (radiance per metre) exactly as the physical march
    evaluates its source (:mod:`vlref.march.physical`: :func:`vlref.lights.shading.light_incidence`,
    :func:`vlref.lights.shadowmaps.shadow_visibility` with each light's own filter, HG with ``d`` the
-   column's ray, the light leg ``T_l`` of ``light_extinction``).
+   column's ray, the light leg ``T_l`` of ``light_extinction`` by :func:`vlref.medium.light_leg_attenuates`).
 2. :func:`froxel_integrate` (Hillaire 2015, slides 27-28): along each column's *centre* ray, slice
    ``k`` has length ``Δ_k = (z_{k+1} - z_k)/(d·f)`` (``f`` the camera forward); with ``S, σt`` of the
-   froxel constant over the step, ``L += T · S (1 - e^{-σt Δ})/σt`` (``S Δ`` when ``σt = 0``), **then**
+   froxel constant over the step, ``L += T · S (1 - e^{-σt Δ})/σt`` (``S Δ`` when ``σt = 0``;
+   :func:`vlref.medium.step_source_weight`, as the physical march), **then**
    ``T *= e^{-σt Δ}``, from ``L = 0, T = 1`` at ``z_0 = 0``. The integrated grid stores ``(L_r, L_g,
    L_b, T)`` at each slice's FAR boundary ``z_{k+1}``.
 3. :func:`froxel_apply`: a pixel with uv ``(u, v)`` and eye depth ``z`` (sky and beyond the grid:
@@ -32,7 +33,7 @@ from numba import njit, prange
 from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shading import light_incidence
 from ..lights.shadowmaps import shadow_visibility
-from ..medium import M_BOUNDED, M_G, M_SS, M_ST, density, optical_depth
+from ..medium import M_G, M_SS, M_ST, density, light_leg_attenuates, optical_depth, step_source_weight
 from ..phase import hg
 from .grid import depth_to_slice
 
@@ -59,7 +60,7 @@ def in_scattering(medium, lights, shadows, geo, x, y, z, dx, dy, dz, light_extin
         kind = li[k, I_KIND]
         vr, vg, vb = shadow_visibility(shadows, geo, kind, lf, k, x, y, z)
         tl = 1.0
-        if light_extinction and mp[M_ST] != 0.0 and not (kind == KIND_DIRECTIONAL and mp[M_BOUNDED] == 0.0):
+        if light_leg_attenuates(mp, kind == KIND_DIRECTIONAL, light_extinction):
             tl = math.exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, 0.0, dist, leg_steps))
         f = ss * hg(dx * lx + dy * ly + dz * lz, mp[M_G]) * tl
         sr += f * er * vr
@@ -101,7 +102,7 @@ def froxel_integrate(scatter, dirs, forward, bounds, out):
             delta = (bounds[k + 1] - bounds[k]) / cos
             st = scatter[r, c, k, 3]
             em1 = math.expm1(-st * delta)
-            s_int = delta if st == 0.0 else -em1 / st
+            s_int = step_source_weight(st, delta, em1)
             lr += trans * scatter[r, c, k, 0] * s_int
             lg += trans * scatter[r, c, k, 1] * s_int
             lb += trans * scatter[r, c, k, 2] * s_int

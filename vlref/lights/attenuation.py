@@ -1,4 +1,4 @@
-"""Distance attenuation laws of point and spot lights, and the float-type helper ``cast``.
+"""Distance attenuation laws of point and spot lights (the ``attenuation`` of a point or spot light).
 
 ``d`` is the distance from the light (metres), ``R`` the light's ``range`` and ``u = d²/R²``.
 Every law is 0 for ``d >= R``: the light volume (a ball of radius ``R``) ends there.
@@ -23,13 +23,16 @@ import math
 from numba import njit
 
 from ..numeric import cast
+from ..scene.model import ATTENUATIONS
 from .cookies import filter_taps
 
 __all__ = ["ATTENUATION_CODES", "INVERSE_SQUARE", "UNITY", "WINDOWED", "MIN_DISTANCE",
            "analytic_attenuation", "distance_attenuation", "unity_folk", "unity_lut_lookup"]
 
-INVERSE_SQUARE, UNITY, WINDOWED = 0, 1, 2
-ATTENUATION_CODES = {"inverse_square": INVERSE_SQUARE, "unity": UNITY, "windowed": WINDOWED}
+ATTENUATION_CODES = {name: code for code, name in enumerate(ATTENUATIONS)}
+"""The code of each distance law, its index in the scene model's one list :data:`vlref.scene.model.ATTENUATIONS`
+(the ``I_ATT`` column of :class:`~vlref.lights.pack.PackedLights`)."""
+INVERSE_SQUARE, UNITY, WINDOWED = (ATTENUATION_CODES[name] for name in ("inverse_square", "unity", "windowed"))
 MIN_DISTANCE = 0.01
 
 

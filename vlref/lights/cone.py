@@ -24,12 +24,15 @@ import math
 from numba import njit
 
 from ..numeric import cast
+from ..scene.model import CONE_LAWS
 
 __all__ = ["CONE_CODES", "CONE_UNITY", "CONE_LINEAR", "CONE_SMOOTHSTEP", "cone_falloff", "cone_polynomial",
            "default_inner_angle"]
 
-CONE_UNITY, CONE_LINEAR, CONE_SMOOTHSTEP = 0, 1, 2
-CONE_CODES = {"unity": CONE_UNITY, "linear": CONE_LINEAR, "smoothstep": CONE_SMOOTHSTEP}
+CONE_CODES = {name: code for code, name in enumerate(CONE_LAWS)}
+"""The code of each cone law, its index in the scene model's one list :data:`vlref.scene.model.CONE_LAWS` (the
+``I_CONE`` column of :class:`~vlref.lights.pack.PackedLights`)."""
+CONE_UNITY, CONE_LINEAR, CONE_SMOOTHSTEP = (CONE_CODES[name] for name in ("unity", "linear", "smoothstep"))
 
 
 def default_inner_angle(law: str, spot_angle: float) -> float:

@@ -1,5 +1,8 @@
 """The physical single-scattering march (docs/PHYSICS.md "The integral"; Hillaire 2015 step integration).
 
+:func:`vlref.reference.integrand.inscatter` is the same physics, one sample at a time: the quadrature
+reference evaluates that integrand exactly where this march sums it step by step.
+
 For each pixel (view ray ``x(t) = o + t d``, ``t ∈ [0, t_end]``, ``t_end = min(scene distance,
 render.max_distance)``) and each light ``l``:
 
@@ -13,19 +16,35 @@ render.max_distance)``) and each light ``l``:
 3. per step, with ``σs, σt`` at the sample (:mod:`vlref.medium`):
    ``S = σs · p(d·l) · V · T_l · E_l`` (``p`` HG with ``l`` toward the light, ``V`` shadow visibility,
    ``T_l`` light-leg transmittance, ``E_l`` :func:`vlref.lights.shading.light_incidence`),
-   ``S_int = S · (1 - e^{-σt Δ}) / σt`` (``S · Δ`` when ``σt = 0``; computed with ``expm1``),
-   ``L += T · S_int``, then ``T *= e^{-σt Δ}``; ``T`` starts at ``exp(-τ(0, a))``.
+   ``S_int = S · (1 - e^{-σt Δ}) / σt`` (:func:`vlref.medium.step_source_weight`: ``S · Δ`` when
+   ``σt = 0``; computed with ``expm1``), ``L += T · S_int``, then ``T *= e^{-σt Δ}`` (Beer–Lambert over
+   the step); ``T`` starts at ``exp(-τ(0, a))``.
 
 Every light adds under the same view transmittance ``T(0, t)``. The pixel's transmittance is
 ``exp(-τ(0, t_end))``. Optical depths ``τ`` are analytic without noise and midpoint sums of ``N``
 sub-steps with noise (:func:`vlref.medium.optical_depth`).
 
-Light leg ``T_l`` (``light_extinction``): ``exp(-τ)`` from the sample to a point or spot light; for a
-directional light, to where the ray toward the light leaves the medium box. **An unbounded medium
-gives a directional light ``T_l = 1``**: its irradiance ``E`` is taken as the irradiance arriving at
-the sample (an infinite homogeneous medium would otherwise extinguish it completely); bound the
-medium with ``medium.bounds`` to attenuate sunlight on its way in. With noise the leg uses
-``leg_steps`` midpoint sub-steps.
+Light leg ``T_l`` (``light_extinction``, :func:`vlref.medium.light_leg_attenuates`): ``exp(-τ)`` from the
+sample to a point or spot light; for a directional light, to where the ray toward the light leaves the
+medium box. **An unbounded medium gives a directional light ``T_l = 1``**: its irradiance ``E`` is taken
+as the irradiance arriving at the sample (an infinite homogeneous medium would otherwise extinguish it
+completely); bound the medium with ``medium.bounds`` to attenuate sunlight on its way in. With noise the
+leg uses ``leg_steps`` midpoint sub-steps. In a noiseless height fog without bounds, the leg of a
+point/spot light is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor reused
+for the larger end.
+
+The stages of one step, each a function below, in the order they run (:func:`_march_packet`):
+
+=======================  ===============================================================================
+:func:`_medium_stage`    the sample ``x = o + t_i d``; density, ``σs``, ``σt``; Beer–Lambert over the step,
+                         ``expm1(-σt Δ)``
+:func:`_light_stage`     the light: direction ``l`` and distance, distance law × cone (its attenuation and
+                         cone), colour and cookie: ``E_l``
+:func:`_leg_stage`       the light leg ``T_l``: Beer–Lambert from the sample to the light
+:func:`_shadow_stage`    the shadow lookup ``V`` (map or shadow ray, the light's strength applied)
+:func:`_accumulate_stage` the phase function ``p(d·l)`` and the accumulation ``L += T S_int``,
+                         ``T *= e^{-σt Δ}``
+=======================  ===============================================================================
 
 Order of convergence in ``Δ`` (smooth integrand): the per-step source is a rectangle rule at offset
 ``β``, so the error is ``≈ (1/2 - β) Δ [f(b) - f(a)] + O(Δ²)``: first order for ``β ≠ 1/2``
@@ -33,33 +52,50 @@ Order of convergence in ``Δ`` (smooth integrand): the per-step source is a rect
 is exact for a constant ``σt`` per step.
 
 Precision: the kernel is compiled for float64 and float32 inputs; in float32 every quantity of the
-march is float32 (constants through :func:`vlref.numeric.cast`, the HG value included) except
-texture/shadow-map coordinates and filter weights (float64, as a GPU's fixed-point sampler would be
-its own) and exact shadow rays (the geometry is float64).
-
-Evaluation (the same integral, rearranged for speed): the rays are marched in **packets** of up to ``LANES``
-(pixel, light) pairs that share a light: every pair takes exactly ``N`` steps, so the lanes of a packet stay
-in lockstep. Each step runs as a few *stages*, each a loop over the lanes that reads and writes one row per
-quantity of a per-thread scratch array (structure of arrays): positions, medium, the light's direction and
-distance law, cone, light leg, then phase and accumulation. A stage without table lookups or libm calls is
-vectorised by LLVM (4 lanes per AVX2 instruction, 8 with AVX-512: every function of the march asks for the
-widest vectors, :func:`vlref.numeric.prefer_wide_vectors`, which LLVM's tuning for Intel's server cores would
-otherwise cap at 256 bits); the stages that look things up — shadow maps and shadow rays, cookies, a Unity
-LUT, noise, the ``linear`` cone's ``acos`` — run lane by lane with the scalar helpers. ``exp`` and ``expm1``
-are :func:`vlref.numeric.exp` / :func:`vlref.numeric.expm1` (≤ 1 / 2 ulp from libm; a libm call would keep the
-loop scalar). Vectorisation never changes a bit: without fast-math LLVM may not reorder arithmetic, and each
-lane computes what a scalar loop would. BENCHMARKS.md "Packets of rays" has the measurements.
-
-In a noiseless height fog the fog exponent is linear in the step index, so the density is ``e^{e_0} q^i``
-(one multiply per step) unless a sample reaches ``FOG_MAX_EXPONENT``; the leg of a point/spot light in an
-unbounded noiseless fog is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor
-reused for the larger end. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral
-needs. These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against
-the per-step ``exp`` form).
+march is float32 (``zero, one = zero_one(scratch)``, then constants through :func:`vlref.numeric.cast`,
+the HG value included) except texture/shadow-map coordinates and filter weights (float64, as a GPU's
+fixed-point sampler would be its own) and exact shadow rays (the geometry is float64).
 
 Determinism: threads take tasks, tiles of pixels (:mod:`vlref.parallel`), each task writes only its own pixels,
 no cross-pixel reduction; a lane's arithmetic does not depend on the other lanes of its packet: the same
 bits for any thread count and any order in which the tasks are taken.
+
+Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARKS.md "Packets of rays",
+"Tiles, Estrin's `exp`, a tighter PCF loop", "Scheduling, borrowed records, a leaner compile"):
+
+* Packets: the rays are marched in packets of up to ``LANES`` (pixel, light) pairs that share a light;
+  every pair takes exactly ``N`` steps, so the lanes of a packet stay in lockstep. A task is a tile of
+  ``TILE_W x TILE_H`` pixels, two packets of 8 x 8: neighbouring samples read neighbouring shadow-map
+  texels.
+* Lanes: each stage is a few loops over the lanes that read and write the packet's *scratch*, one row of
+  ``LANES`` values per quantity (structure of arrays, rows ``R_*``; :func:`lane` / :func:`set_lane` and
+  the three-row :func:`lane3` / :func:`set_lane3` name them; Numba inlines them in its IR, ``inline="always"``,
+  so each is the plain ``scratch[R + m]`` to LLVM, with no call or reference count around it). The
+  rows of one array at compile-time constant offsets let LLVM see every row apart and vectorise without
+  run-time alias checks.
+* Vectorisation: a lane loop without table lookups or libm calls is vectorised by LLVM (4 lanes per AVX2
+  instruction, 8 with AVX-512: every function of the march asks for the widest vectors,
+  :func:`vlref.numeric.prefer_wide_vectors`, which LLVM's tuning for Intel's server cores would otherwise
+  cap at 256 bits). The loops that look things up — shadow maps and shadow rays, cookies, a Unity LUT,
+  noise, the ``linear`` cone's ``acos`` — run lane by lane with the scalar helpers. ``exp`` and ``expm1``
+  are :func:`vlref.numeric.exp` / :func:`vlref.numeric.expm1` (≤ 1 / 2 ulp from libm; a libm call would
+  keep the loop scalar). Without fast-math LLVM may not reorder arithmetic, and each lane computes what a
+  scalar loop would. The vectorised loops read only scalars and the scratch: a record's array read inside
+  a lane loop costs reference-counting calls, which keep the loop scalar.
+* The spot light's PCF lookup without a transparent layer (:func:`_shadow_stage`) runs as three loops: map
+  coordinates, weights and texel offsets (vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
+  four depth reads for every lane (no branch: a read skipped for lanes that scatter nothing made the loop
+  branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
+  under the condition; LLVM keeps the reads scalar on AVX-512 too, its cost model for Zen 4 and Sapphire
+  Rapids emits no gathers), then ``V`` (vectorised).
+* Height fog: in a noiseless fog the fog exponent is linear in the step index, so the density is
+  ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
+  ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
+  These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against the
+  per-step ``exp`` form).
+* Compilation: counts and flags are passed as ``np.int64`` / plain ``bool`` values, never literals (a
+  ``Literal[int](0)`` or ``Literal[bool](True)`` argument compiles a function a second time); ``geo`` None
+  compiles the march without the ray tracer (:func:`march_physical`).
 """
 
 from __future__ import annotations
@@ -77,8 +113,9 @@ from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, 
                                  apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
-                      fog_exponent, height_exponent, optical_depth, smooth_optical_depth)
-from ..numeric import cast, exp, expm1, prefer_wide_vectors
+                      fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
+                      step_source_weight)
+from ..numeric import cast, exp, expm1, prefer_wide_vectors, zero_one
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
@@ -86,190 +123,249 @@ from .segments import light_segment
 __all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
 
 LANES = 64  # (pixel, light) pairs per packet
-# a task (the threads take tasks on demand: vlref.parallel.take) is a tile of TILE_W x TILE_H pixels, two
-# packets of 8 x 8: neighbouring samples of a packet read neighbouring shadow-map texels (BENCHMARKS.md
-# "Tiles, Estrin's `exp`, a tighter PCF loop")
-TILE_W, TILE_H = 8, 16
+TILE_W, TILE_H = 8, 16  # a task: a tile of TILE_W x TILE_H pixels, two packets of 8 x 8 (module docstring)
 
-# offsets of the rows of the scratch array: lane m of row R is s[R + m] (compile-time constants, so LLVM
-# sees every row apart and vectorises without run-time alias checks)
+# The packet's scratch (module docstring, "Lanes"): lane m of row R is scratch[R + m]. A row named for a
+# vector or a colour is the first of three consecutive rows, (x, y, z) or (r, g, b).
 ROWS = 34
-(R_A, R_D, R_B, R_DX, R_DY, R_DZ, R_TRANS, R_FOG, R_FOGQ, R_GEOM, R_X, R_Y, R_Z, R_EA, R_RHO, R_ST, R_SS, R_EM1,
- R_LX, R_LY, R_LZ, R_DIST, R_D2, R_E, R_ER, R_EG, R_EB, R_TL, R_VR, R_VG, R_VB, R_AR, R_AG, R_AB) = range(0, ROWS * LANES,
-                                                                                                        LANES)
-# float64 rows: a spot light's shadow-map distance and PCF weights, as map_lit computes them (and the
-# uint64 scratch ``taps`` holds the four texel offsets)
+R_START = 0 * LANES  # a, the segment's start
+R_DELTA = 1 * LANES  # b, the segment's end, until _setup replaces it by the step Δ = (b - a)/N
+R_BETA = 2 * LANES  # β, the pixel's sample offset in [0, 1)
+R_DIR = 3 * LANES  # (3) d, the unit view direction
+R_T_VIEW = 6 * LANES  # T, the view transmittance from the eye to the step's start
+R_FOG = 7 * LANES  # the height fog's factor e^{e_i} at the next sample (running product)
+R_FOG_STEP = 8 * LANES  # the running product's ratio q per step
+R_GEOMETRIC = 9 * LANES  # 1 where the lane takes the running product, else 0
+R_POS = 10 * LANES  # (3) x = o + t d, the sample
+R_FOG_EXP = 13 * LANES  # the fog exponent at the sample (0 without fog)
+R_RHO = 14 * LANES  # ρ, the density factor at the sample
+R_SIGMA_T = 15 * LANES  # σt, extinction (1/m)
+R_SIGMA_S = 16 * LANES  # σs, scattering (1/m)
+R_EM1 = 17 * LANES  # expm1(-σt Δ), Beer–Lambert over the step
+R_TO_LIGHT = 18 * LANES  # (3) l, the unit vector toward the light
+R_DIST = 21 * LANES  # the distance to the light (inf for a directional light)
+R_DIST2 = 22 * LANES  # its square
+R_E = 23 * LANES  # distance law × cone
+R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
+R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
+R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
+R_L = 31 * LANES  # (3) L, the radiance scattered toward the eye so far
+# float64 rows of a spot light's PCF lookup (as map_lit computes them): the sample's map depth, in front of
+# the light, the four texel weights, the lit fraction; the uint64 rows T_00..T_11 of ``taps`` hold the four
+# texel offsets
 QROWS = 7
 Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
+T_00, T_10, T_01, T_11 = range(0, 4 * LANES, LANES)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def lane(scratch, row, m):
+    """Lane ``m`` of ``row`` (an ``R_*``, ``Q_*`` or ``T_*`` offset) of a packet's scratch."""
+    return scratch[row + m]
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def set_lane(scratch, row, m, value):
+    """Store ``value`` in lane ``m`` of ``row`` (in the scratch's type)."""
+    scratch[row + m] = value
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def lane3(scratch, row, m):
+    """Lane ``m`` of the three rows from ``row``: a vector ``(x, y, z)`` or a colour ``(r, g, b)``."""
+    return scratch[row + m], scratch[row + LANES + m], scratch[row + 2 * LANES + m]
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def set_lane3(scratch, row, m, a, b, c):
+    """Store ``(a, b, c)`` in lane ``m`` of the three rows from ``row``."""
+    scratch[row + m] = a
+    scratch[row + LANES + m] = b
+    scratch[row + 2 * LANES + m] = c
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def scatters_light(ss, er, eg, eb):
+    """The sample scatters light of this light: ``σs > 0`` and ``E_l ≠ 0`` (no shadow lookup elsewhere)."""
+    zero = cast(ss, 0.0)
+    return ss > zero and er + eg + eb > zero
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _setup(s, n, origin, steps, medium):
-    """Lanes ``0..n-1``, whose rows ``R_A`` (``a``), ``R_D`` (``b``), ``R_B`` (``β``) and the direction hold
-    their segment: ``Δ`` replaces ``b``; the view transmittance to ``a``, the fog's running product and the
-    sums are set (module docstring). Lane loops: vectorised without noise."""
+    """Lanes ``0..n-1`` hold their segment ``a``, ``b``, ``β`` and direction ``d``: ``Δ`` replaces ``b``; the
+    view transmittance to ``a``, ``T = exp(-τ(0, a))``, the fog's running product and the sums are set."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
-    zero, one = cast(ox, 0.0), cast(ox, 1.0)
-    fsteps = cast(ox, steps)
-    for m in range(n):
-        s[R_D + m] = (s[R_D + m] - s[R_A + m]) / fsteps
-    if mp[M_NOISE] != zero:  # optical_depth's sub-step loop; without noise its closed form, a vectorised loop
+    zero, one = zero_one(s)
+    fsteps = cast(one, steps)
+    for m in range(n):  # the step Δ = (b - a)/N
+        set_lane(s, R_DELTA, m, (lane(s, R_DELTA, m) - lane(s, R_START, m)) / fsteps)
+    if mp[M_NOISE] != zero:  # Beer–Lambert from the eye to a: optical_depth's sub-step loop, or its closed form
         for m in range(n):
-            s[R_TRANS + m] = exp(-optical_depth(mp, lattice, ox, oy, oz, s[R_DX + m], s[R_DY + m], s[R_DZ + m],
-                                                zero, s[R_A + m], steps))
+            dx, dy, dz = lane3(s, R_DIR, m)
+            set_lane(s, R_T_VIEW, m, exp(-optical_depth(mp, lattice, ox, oy, oz, dx, dy, dz, zero, lane(s, R_START, m),
+                                                        steps)))
     else:
         for m in range(n):
-            s[R_TRANS + m] = exp(-smooth_optical_depth(mp, ox, oy, oz, s[R_DX + m], s[R_DY + m], s[R_DZ + m],
-                                                       zero, s[R_A + m]))
-    cap = cast(ox, FOG_MAX_EXPONENT)
+            dx, dy, dz = lane3(s, R_DIR, m)
+            set_lane(s, R_T_VIEW, m, exp(-smooth_optical_depth(mp, ox, oy, oz, dx, dy, dz, zero, lane(s, R_START, m))))
+    cap = cast(one, FOG_MAX_EXPONENT)
     smooth_fog = mp[M_FOG] != zero and mp[M_NOISE] == zero
-    for m in range(n):
-        a, delta, beta, dy = s[R_A + m], s[R_D + m], s[R_B + m], s[R_DY + m]
+    for m in range(n):  # the height fog's factor at the first sample and its ratio per step
+        a, delta, beta = lane(s, R_START, m), lane(s, R_DELTA, m), lane(s, R_BETA, m)
+        _, dy, _ = lane3(s, R_DIR, m)
         e_first = fog_exponent(mp, oy + (a + beta * delta) * dy)
         e_last = fog_exponent(mp, oy + (a + (fsteps - one + beta) * delta) * dy)
         geometric = smooth_fog and max(e_first, e_last) < cap and min(e_first, e_last) > -cap
-        s[R_GEOM + m] = one if geometric else zero
-        s[R_FOG + m] = exp(e_first) if geometric else one
-        s[R_FOGQ + m] = exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one
-        s[R_AR + m] = s[R_AG + m] = s[R_AB + m] = zero
+        set_lane(s, R_GEOMETRIC, m, one if geometric else zero)
+        set_lane(s, R_FOG, m, exp(e_first) if geometric else one)
+        set_lane(s, R_FOG_STEP, m, exp(-(dy * delta) * mp[M_FOG_K]) if geometric else one)
+        set_lane3(s, R_L, m, zero, zero, zero)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _medium_stage(s, n, i, origin, medium, geometric):
-    """Sample positions ``x = o + t d``, ``t = a + (i + β) Δ``; density, ``σs``, ``σt``, ``expm1(-σt Δ)``.
-    ``geometric``: every lane takes the fog's running product.
-    The vectorised loops read only scalars and ``s`` (an array read inside a lane loop costs reference
-    counting calls, which keep the loop scalar)."""
+    """The medium at sample ``i``: ``x = o + t d``, ``t = a + (i + β) Δ``; the density, ``σs``, ``σt``, and
+    Beer–Lambert over the step, ``expm1(-σt Δ)``. ``geometric``: every lane takes the fog's running product."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
-    zero, one = cast(ox, 0.0), cast(ox, 1.0)
+    zero, one = zero_one(s)
     fog, noise, bounded = mp[M_FOG] != zero, mp[M_NOISE] != zero, mp[M_BOUNDED] != zero
     base, falloff = mp[M_FOG_BASE], mp[M_FOG_K]
     x0, y0, z0, x1, y1, z1 = mp[M_BX0], mp[M_BY0], mp[M_BZ0], mp[M_BX1], mp[M_BY1], mp[M_BZ1]
     ss0, st0 = mp[M_SS], mp[M_ST]
-    fi = cast(ox, i)
-    for m in range(n):
-        t = s[R_A + m] + (fi + s[R_B + m]) * s[R_D + m]
-        x, y, z = ox + t * s[R_DX + m], oy + t * s[R_DY + m], oz + t * s[R_DZ + m]
-        s[R_X + m], s[R_Y + m], s[R_Z + m] = x, y, z
-        s[R_EA + m] = height_exponent(base, falloff, y) if fog else zero
-    if noise:
+    fi = cast(one, i)
+    for m in range(n):  # the sample
+        t = lane(s, R_START, m) + (fi + lane(s, R_BETA, m)) * lane(s, R_DELTA, m)
+        dx, dy, dz = lane3(s, R_DIR, m)
+        x, y, z = ox + t * dx, oy + t * dy, oz + t * dz
+        set_lane3(s, R_POS, m, x, y, z)
+        set_lane(s, R_FOG_EXP, m, height_exponent(base, falloff, y) if fog else zero)
+    if noise:  # the density
         for m in range(n):
-            s[R_RHO + m] = density(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m])
+            x, y, z = lane3(s, R_POS, m)
+            set_lane(s, R_RHO, m, density(mp, lattice, x, y, z))
     else:  # smooth_density, with the fog's running product where it holds (on every lane: no exp at all)
         for m in range(n):
-            inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, s[R_X + m], s[R_Y + m],
-                                                 s[R_Z + m])
-            running = s[R_FOG + m]
+            x, y, z = lane3(s, R_POS, m)
+            inside = not bounded or box_contains(x0, y0, z0, x1, y1, z1, x, y, z)
+            running = lane(s, R_FOG, m)
             if geometric:
                 rho = running
             else:
-                rho = running if s[R_GEOM + m] != zero else (exp(s[R_EA + m]) if fog else one)
-            s[R_RHO + m] = rho if inside else zero
-            s[R_FOG + m] = running * s[R_FOGQ + m]
-    for m in range(n):
-        rho = s[R_RHO + m]
+                rho = running if lane(s, R_GEOMETRIC, m) != zero else (exp(lane(s, R_FOG_EXP, m)) if fog else one)
+            set_lane(s, R_RHO, m, rho if inside else zero)
+            set_lane(s, R_FOG, m, running * lane(s, R_FOG_STEP, m))
+    for m in range(n):  # σs, σt, and Beer–Lambert over the step
+        rho = lane(s, R_RHO, m)
         st = st0 * rho
-        s[R_ST + m], s[R_SS + m] = st, ss0 * rho
-        s[R_EM1 + m] = expm1(-st * s[R_D + m])
+        set_lane(s, R_SIGMA_T, m, st)
+        set_lane(s, R_SIGMA_S, m, ss0 * rho)
+        set_lane(s, R_EM1, m, expm1(-st * lane(s, R_DELTA, m)))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _light_stage(s, n, lights, k):
-    """Direction ``l`` toward light ``k``, distance and ``E`` without colour: distance law × cone (0 at the
-    light's own position), then ``E`` per channel with the colour and the cookie."""
+    """The light ``k`` at the samples: direction ``l`` and distance, the light's attenuation (distance law)
+    and cone (0 at the light's own position), then ``E_l`` per channel with the colour and the cookie
+    (:func:`vlref.lights.shading.light_incidence`, lane by lane)."""
     prefer_wide_vectors()
     li, lf = lights.ints, lights.floats
     kind, law, cone = li[k, I_KIND], li[k, I_ATT], li[k, I_CONE]
-    zero, one = cast(lf[0, 0], 0.0), cast(lf[0, 0], 1.0)
+    zero, one = zero_one(s)
     if kind == KIND_DIRECTIONAL:
+        lx, ly, lz = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
         for m in range(n):
-            s[R_LX + m], s[R_LY + m], s[R_LZ + m] = -lf[k, F_DX], -lf[k, F_DY], -lf[k, F_DZ]
-            s[R_DIST + m] = cast(one, np.inf)
-            s[R_E + m] = one
+            set_lane3(s, R_TO_LIGHT, m, lx, ly, lz)
+            set_lane(s, R_DIST, m, cast(one, np.inf))
+            set_lane(s, R_E, m, one)
     else:
         inv_r2 = lf[k, F_INV_RANGE2]
         px, py, pz = lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ]
-        for m in range(n):
-            lx, ly, lz, dist, d2 = light_vector(px, py, pz, s[R_X + m], s[R_Y + m], s[R_Z + m])
-            s[R_LX + m], s[R_LY + m], s[R_LZ + m], s[R_DIST + m], s[R_D2 + m] = lx, ly, lz, dist, d2
-        if law == UNITY and lights.lut.size > 0:
+        for m in range(n):  # direction and distance
+            x, y, z = lane3(s, R_POS, m)
+            lx, ly, lz, dist, d2 = light_vector(px, py, pz, x, y, z)
+            set_lane3(s, R_TO_LIGHT, m, lx, ly, lz)
+            set_lane(s, R_DIST, m, dist)
+            set_lane(s, R_DIST2, m, d2)
+        if law == UNITY and lights.lut.size > 0:  # the light's attenuation: its distance law
             for m in range(n):
-                s[R_E + m] = distance_attenuation(law, s[R_D2 + m], inv_r2, lights.lut)
+                set_lane(s, R_E, m, distance_attenuation(law, lane(s, R_DIST2, m), inv_r2, lights.lut))
         else:
             for m in range(n):
-                s[R_E + m] = analytic_attenuation(law, s[R_D2 + m], inv_r2)
+                set_lane(s, R_E, m, analytic_attenuation(law, lane(s, R_DIST2, m), inv_r2))
         for m in range(n):
-            s[R_E + m] = s[R_E + m] if s[R_D2 + m] != zero else zero
-        if kind == KIND_SPOT:
+            set_lane(s, R_E, m, lane(s, R_E, m) if lane(s, R_DIST2, m) != zero else zero)
+        if kind == KIND_SPOT:  # the cone
             ax, ay, az = lf[k, F_DX], lf[k, F_DY], lf[k, F_DZ]
             co, ci, ua, ub = lf[k, F_COS_OUTER], lf[k, F_COS_INNER], lf[k, F_UNITY_A], lf[k, F_UNITY_B]
             if cone == CONE_LINEAR:
+                half_outer, half_inner = lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER]
                 for m in range(n):
-                    cos_t = -(s[R_LX + m] * ax + s[R_LY + m] * ay + s[R_LZ + m] * az)
-                    s[R_E + m] *= cone_falloff(cone, cos_t, co, ci, lf[k, F_HALF_OUTER], lf[k, F_HALF_INNER],
-                                                   ua, ub)
+                    lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+                    cos_t = -(lx * ax + ly * ay + lz * az)
+                    set_lane(s, R_E, m, lane(s, R_E, m) * cone_falloff(cone, cos_t, co, ci, half_outer, half_inner,
+                                                                       ua, ub))
             else:
                 for m in range(n):
-                    cos_t = -(s[R_LX + m] * ax + s[R_LY + m] * ay + s[R_LZ + m] * az)
-                    s[R_E + m] *= cone_polynomial(cone, cos_t, co, ci, ua, ub)
+                    lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+                    cos_t = -(lx * ax + ly * ay + lz * az)
+                    set_lane(s, R_E, m, lane(s, R_E, m) * cone_polynomial(cone, cos_t, co, ci, ua, ub))
     cr, cg, cb = lf[k, F_CR], lf[k, F_CG], lf[k, F_CB]
-    for m in range(n):
-        e = s[R_E + m]
-        s[R_ER + m], s[R_EG + m], s[R_EB + m] = e * cr, e * cg, e * cb
-    if li[k, I_CK_OFF] >= 0:
+    for m in range(n):  # the colour
+        e = lane(s, R_E, m)
+        set_lane3(s, R_E_RGB, m, e * cr, e * cg, e * cb)
+    if li[k, I_CK_OFF] >= 0:  # the cookie
         for m in range(n):
-            if s[R_E + m] != zero:
-                r, g, b = cookie_rgb(lights, k, s[R_X + m], s[R_Y + m], s[R_Z + m])
-                s[R_ER + m] *= cast(one, r)
-                s[R_EG + m] *= cast(one, g)
-                s[R_EB + m] *= cast(one, b)
+            if lane(s, R_E, m) != zero:
+                x, y, z = lane3(s, R_POS, m)
+                r, g, b = cookie_rgb(lights, k, x, y, z)
+                er, eg, eb = lane3(s, R_E_RGB, m)
+                set_lane3(s, R_E_RGB, m, er * cast(one, r), eg * cast(one, g), eb * cast(one, b))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps):
-    """Light-leg transmittance ``T_l`` (module docstring): 1, the height-fog closed form (vectorised), or
-    :func:`~vlref.medium.optical_depth` lane by lane."""
+def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
+    """The light leg ``T_l``, Beer–Lambert from the sample to the light (module docstring): 1 unless the leg
+    ``attenuates`` (:func:`~vlref.medium.light_leg_attenuates`), else the height fog's closed form or
+    :func:`~vlref.medium.optical_depth`."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
-    zero, one = cast(mp[0], 0.0), cast(mp[0], 1.0)
+    zero, one = zero_one(s)
     st0 = mp[M_ST]
     bounded, noise = mp[M_BOUNDED] != zero, mp[M_NOISE] != zero
-    if not light_extinction or st0 == zero or (kind == KIND_DIRECTIONAL and not bounded):
+    if not attenuates:
         for m in range(n):
-            s[R_TL + m] = one
+            set_lane(s, R_T_LIGHT, m, one)
     elif mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
         el = height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], light_y)  # the leg ends at the light
         fog_l = exp(el)
         for m in range(n):
-            dist, ea, rho = s[R_DIST + m], s[R_EA + m], s[R_RHO + m]
+            dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
             top = rho if ea >= el else fog_l
-            s[R_TL + m] = exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el))))
+            set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el)))))
     else:
         for m in range(n):
-            s[R_TL + m] = exp(-optical_depth(mp, lattice, s[R_X + m], s[R_Y + m], s[R_Z + m],
-                                                 s[R_LX + m], s[R_LY + m], s[R_LZ + m], zero,
-                                                 s[R_DIST + m], leg_steps))
+            x, y, z = lane3(s, R_POS, m)
+            lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+            set_lane(s, R_T_LIGHT, m, exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, lane(s, R_DIST, m),
+                                                         leg_steps)))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
-    """Visibility ``V`` per channel (strength applied) where the sample scatters light; 1 elsewhere. A spot
-    light's PCF lookup without a transparent layer has its map coordinates, weights and texel offsets computed
-    in one vectorised loop (float64 rows of ``q``, ``taps``), its four depth reads in a second loop that writes
-    every lane's lit fraction (no branch: a read skipped for lanes that scatter nothing made the loop branch on
-    every lane, and the lit fraction a row of its own keeps LLVM from moving the reads back under the
-    condition), and ``V`` in a third, vectorised loop. LLVM keeps the reads scalar on AVX-512 too (its cost
-    model for Zen 4 and Sapphire Rapids emits no gathers). Every other lookup is
+    """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
+    scatters light, 1 elsewhere. A spot light's PCF map without a transparent layer: map coordinates, the
+    four depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
     :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
     prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
     strength = shadows.floats[k, S_STRENGTH]
-    zero, one = cast(lights.floats[0, 0], 0.0), cast(lights.floats[0, 0], 1.0)
+    zero, one = zero_one(s)
     lf = lights.floats
     sm_i, data = shadows.ints, shadows.data
     if kind == KIND_SPOT and mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
@@ -279,60 +375,72 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
         dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
         tan_half = float(lf[k, F_TAN_HALF])
         res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
-        for m in range(n):
-            u, v, d_ref, ahead = spot_map_coords(float(s[R_X + m]) - px, float(s[R_Y + m]) - py,
-                                                 float(s[R_Z + m]) - pz, rx, ry, rz, ux, uy, uz, dx, dy, dz,
-                                                 tan_half)
+        for m in range(n):  # the sample in the map: coordinates, depth, the four texels and their weights
+            x, y, z = lane3(s, R_POS, m)
+            u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
+                                                 dx, dy, dz, tan_half)
             (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
-            q[Q_DREF + m] = d_ref
-            q[Q_AHEAD + m] = 1.0 if ahead else 0.0
-            q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m] = w00, w10, w01, w11
-            taps[m], taps[1 * LANES + m] = np.uint64(k00), np.uint64(k10)
-            taps[2 * LANES + m], taps[3 * LANES + m] = np.uint64(k01), np.uint64(k11)
-        # every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that scatter nothing
-        # keep V = 1 in the loop after
+            set_lane(q, Q_DREF, m, d_ref)
+            set_lane(q, Q_AHEAD, m, 1.0 if ahead else 0.0)
+            set_lane(q, Q_W00, m, w00)
+            set_lane(q, Q_W10, m, w10)
+            set_lane(q, Q_W01, m, w01)
+            set_lane(q, Q_W11, m, w11)
+            set_lane(taps, T_00, m, np.uint64(k00))
+            set_lane(taps, T_10, m, np.uint64(k10))
+            set_lane(taps, T_01, m, np.uint64(k01))
+            set_lane(taps, T_11, m, np.uint64(k11))
+        # the lit fraction: every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that
+        # scatter nothing keep V = 1 in the loop after
         for m in range(n):
-            q[Q_LIT + m] = pcf_blend(data, ubase, taps[m], taps[1 * LANES + m], taps[2 * LANES + m],
-                                     taps[3 * LANES + m], q[Q_W00 + m], q[Q_W10 + m], q[Q_W01 + m], q[Q_W11 + m],
-                                     q[Q_DREF + m])
-        for m in range(n):
-            fr, _, _ = apply_strength(strength, q[Q_LIT + m], q[Q_LIT + m], q[Q_LIT + m])
-            used = q[Q_AHEAD + m] != 0.0 and s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero
+            set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
+                                            lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m),
+                                            lane(q, Q_W01, m), lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+        for m in range(n):  # V, the light's strength applied
+            lit = lane(q, Q_LIT, m)
+            fr, _, _ = apply_strength(strength, lit, lit, lit)
+            er, eg, eb = lane3(s, R_E_RGB, m)
+            used = lane(q, Q_AHEAD, m) != 0.0 and scatters_light(lane(s, R_SIGMA_S, m), er, eg, eb)
             v = cast(one, fr) if used else one
-            s[R_VR + m], s[R_VG + m], s[R_VB + m] = v, v, v
+            set_lane3(s, R_VIS, m, v, v, v)
         return
     for m in range(n):  # the PCF loop above writes every lane; here V = 1 unless a lookup says otherwise
-        s[R_VR + m] = s[R_VG + m] = s[R_VB + m] = one
+        set_lane3(s, R_VIS, m, one, one, one)
     if mode == SHADOW_NONE:
         return
     for m in range(n):
-        if s[R_SS + m] > zero and s[R_ER + m] + s[R_EG + m] + s[R_EB + m] > zero:
-            x, y, z = float(s[R_X + m]), float(s[R_Y + m]), float(s[R_Z + m])
+        er, eg, eb = lane3(s, R_E_RGB, m)
+        if scatters_light(lane(s, R_SIGMA_S, m), er, eg, eb):
+            x, y, z = lane3(s, R_POS, m)
+            x, y, z = float(x), float(y), float(z)
             if geo is not None and mode == SHADOW_EXACT:  # geo None: Numba prunes the branch (no ray tracer)
                 fr, fg, fb = exact_visibility(geo, kind, lf, k, x, y, z)
             else:
                 fr, fg, fb = map_lit(shadows, kind, lf, k, x, y, z)
             fr, fg, fb = apply_strength(strength, fr, fg, fb)
-            s[R_VR + m], s[R_VG + m], s[R_VB + m] = cast(one, fr), cast(one, fg), cast(one, fb)
+            set_lane3(s, R_VIS, m, cast(one, fr), cast(one, fg), cast(one, fb))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _accumulate_stage(s, n, g):
-    """``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then ``T *= e^{-σt Δ}`` (module docstring)."""
+    """The phase function and the accumulation: ``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then
+    Beer–Lambert over the step, ``T *= e^{-σt Δ}`` (module docstring; ``g`` the HG asymmetry)."""
     prefer_wide_vectors()
-    zero, one = cast(g, 0.0), cast(g, 1.0)
+    zero, one = zero_one(s)
     for m in range(n):
-        st, ss, em1, delta = s[R_ST + m], s[R_SS + m], s[R_EM1 + m], s[R_D + m]
-        er, eg, eb = s[R_ER + m], s[R_EG + m], s[R_EB + m]
-        cos_t = s[R_DX + m] * s[R_LX + m] + s[R_DY + m] * s[R_LY + m] + s[R_DZ + m] * s[R_LZ + m]
-        phase = cast(g, hg(cos_t, g))
-        s_int = delta if st == zero else -em1 / st
-        f = s[R_TRANS + m] * ss * phase * s[R_TL + m] * s_int
-        lit = ss > zero and er + eg + eb > zero
-        s[R_AR + m] += f * er * s[R_VR + m] if lit else zero
-        s[R_AG + m] += f * eg * s[R_VG + m] if lit else zero
-        s[R_AB + m] += f * eb * s[R_VB + m] if lit else zero
-        s[R_TRANS + m] *= one + em1
+        st, ss, em1, delta = lane(s, R_SIGMA_T, m), lane(s, R_SIGMA_S, m), lane(s, R_EM1, m), lane(s, R_DELTA, m)
+        er, eg, eb = lane3(s, R_E_RGB, m)
+        dx, dy, dz = lane3(s, R_DIR, m)
+        lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+        phase = cast(one, hg(dx * lx + dy * ly + dz * lz, g))
+        t_view = lane(s, R_T_VIEW, m)
+        f = t_view * ss * phase * lane(s, R_T_LIGHT, m) * step_source_weight(st, delta, em1)
+        lit = scatters_light(ss, er, eg, eb)
+        vr, vg, vb = lane3(s, R_VIS, m)
+        lr, lg, lb = lane3(s, R_L, m)
+        set_lane3(s, R_L, m, lr + (f * er * vr if lit else zero), lg + (f * eg * vg if lit else zero),
+                  lb + (f * eb * vb if lit else zero))
+        set_lane(s, R_T_VIEW, m, t_view * (one + em1))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -344,20 +452,20 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
+    attenuates = light_leg_attenuates(medium.params, kind == KIND_DIRECTIONAL, light_extinction)
     n_geometric = 0
     for m in range(n):
-        n_geometric += s[R_GEOM + m] != 0.0
+        n_geometric += lane(s, R_GEOMETRIC, m) != 0.0
     geometric = n_geometric == n  # a bool, never Literal[bool](True): _medium_stage would compile twice
     for i in range(steps):
-        _medium_stage(s, n, i, origin, medium, geometric)
-        _light_stage(s, n, lights, k)
-        _leg_stage(s, n, medium, kind, light_y, light_extinction, leg_steps)
-        _shadow_stage(s, q, taps, n, shadows, geo, lights, k)
-        _accumulate_stage(s, n, g)
+        _medium_stage(s, n, i, origin, medium, geometric)  # the medium: σs, σt, Beer–Lambert over the step
+        _light_stage(s, n, lights, k)  # the light: its direction, attenuation, cone, colour, cookie
+        _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps)  # Beer–Lambert toward the light
+        _shadow_stage(s, q, taps, n, shadows, geo, lights, k)  # the shadow lookup
+        _accumulate_stage(s, n, g)  # the phase function and the accumulation
     for m in range(n):
         i, j = pix[m] // w, pix[m] % w
-        per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = (s[R_AR + m], s[R_AG + m],
-                                                                                 s[R_AB + m])
+        per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = lane3(s, R_L, m)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -370,11 +478,11 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     h, w = t_end.shape
-    zero = cast(ox, 0.0)
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
     taps = np.empty(4 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
+    zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
     tiles = tiles_x * ((h + TILE_H - 1) // TILE_H)
     while True:
@@ -383,7 +491,7 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
             return
         i0, j0 = (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
         i1, j1 = min(h, i0 + TILE_H), min(w, j0 + TILE_W)
-        for i in range(i0, i1):
+        for i in range(i0, i1):  # the pixel's transmittance, Beer–Lambert from the eye to t_end
             for j in range(j0, j1):
                 transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
                                                          dirs[i, j, 2], zero, t_end[i, j], steps))
@@ -398,8 +506,10 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
                     if b <= a:
                         per_light[k, i, j, 0] = per_light[k, i, j, 1] = per_light[k, i, j, 2] = zero
                         continue
-                    s[R_A + n], s[R_D + n], s[R_B + n] = a, b, offsets[i, j]
-                    s[R_DX + n], s[R_DY + n], s[R_DZ + n] = dx, dy, dz
+                    set_lane(s, R_START, n, a)
+                    set_lane(s, R_DELTA, n, b)
+                    set_lane(s, R_BETA, n, offsets[i, j])
+                    set_lane3(s, R_DIR, n, dx, dy, dz)
                     pix[n] = i * w + j
                     n += 1
                     if n == LANES:

@@ -28,6 +28,7 @@ from ..errors import InputError
 from ..io import read_image
 from .metrics import FlipResult, error_metrics, failing_pixels, hdr_flip
 from .presets import Tolerance, tolerance
+from .report import write_outputs
 
 __all__ = [
     "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files", "margin",
@@ -239,8 +240,6 @@ def compare_files(ref_path, test_path, preset: str = "float32", overrides: Mappi
     ``preset`` with ``overrides``, and, when ``out_dir`` is given, write report.json, diff.exr,
     heatmap.png, flip.png (when FLIP is available) and report.html there (all or nothing).
     ``exposure`` sets the preview exposure of the HTML page (default: automatic)."""
-    from .report import write_outputs
-
     tol = tolerance(preset, overrides)
     ref = read_image(ref_path, key=key)
     test = read_image(test_path, key=key)

@@ -41,7 +41,16 @@ from typing import Sequence
 import numpy as np
 
 from .. import __version__
+from ..cluster import Item, run_items
 from ..errors import InputError
+from ..io import output_dir, read_image, write_exr, write_text
+from ..render import render, scene_hash, scene_settings_json
+from ..scene import bundled_scenes, load_scene
+from ..sequence import render_sequence
+from ..techniques import TECHNIQUES
+from ..tomlfile import read_toml
+from .compare import compare_arrays
+from .presets import tolerance
 
 __all__ = ["Entry", "GoldenSuite", "load_suite", "suite_entries", "select_entries", "render_entry",
            "build", "build_dir", "verify", "Outcome", "SUITE_FILE", "MANIFEST", "find_golden_dir",
@@ -126,9 +135,6 @@ class Entry:
 
 def load_suite(path=SUITE_FILE) -> GoldenSuite:
     """Read and check a suite file; :class:`InputError` names the bad key."""
-    from ..techniques import TECHNIQUES
-    from ..tomlfile import read_toml
-
     path = Path(path)
     data = read_toml(path, "suite file")
     ints = {}
@@ -137,7 +143,6 @@ def load_suite(path=SUITE_FILE) -> GoldenSuite:
         if not isinstance(value, int) or isinstance(value, bool) or value < 1:
             raise InputError(str(path), key, f"must be an integer >= 1, got {value!r}")
         ints[key] = value
-    from .presets import tolerance
     preset = data.get("preset", "float32")
     try:
         tolerance(str(preset))
@@ -179,9 +184,6 @@ def _overrides(suite: GoldenSuite, scene, technique: str) -> tuple[str, ...]:
 def suite_entries(suite: GoldenSuite) -> list[Entry]:
     """Every (bundled scene, applicable technique) pair, scenes by name, techniques in suite order; an
     animated scene gets one entry per frame of ``animation_frames`` (``render.frame=F`` appended)."""
-    from ..scene import bundled_scenes, load_scene
-    from ..techniques import TECHNIQUES
-
     entries = []
     for name, path in bundled_scenes().items():
         base = load_scene(path, [f"render.width={suite.width}", f"render.height={suite.height}"])
@@ -200,10 +202,6 @@ def render_entry(entry: Entry, buffers: Sequence[str]):
 
     A temporal entry (``froxel`` with ``temporal = true``) at frame F renders frames 0..F in sequence
     (:func:`vlref.sequence.render_sequence`) and keeps the last."""
-    from ..render import render
-    from ..scene import load_scene
-    from ..sequence import render_sequence
-
     scene = load_scene(entry.scene, entry.overrides)
     if scene.render.technique == "froxel" and scene.techniques.froxel.temporal:
         result = list(render_sequence(scene, range(scene.render.frame + 1)))[-1][1]
@@ -262,10 +260,6 @@ def build(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = N
     manifest are the same bytes whatever the scheduler.
     """
     import numba
-
-    from ..cluster import Item, run_items
-    from ..io import output_dir, write_exr, write_text
-    from ..render import scene_hash, scene_settings_json
 
     suite = load_suite(suite_path)
     golden_dir = Path(golden_dir) if golden_dir is not None else build_dir()
@@ -356,11 +350,6 @@ def verify(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = 
     The re-renders are independent items run on ``scheduler`` (:func:`vlref.cluster.run_items`) and
     compared here as they arrive; the outcomes are in entry-name order whatever the scheduler.
     """
-    from ..cluster import Item, run_items
-    from ..io import read_image
-    from ..render import scene_hash, scene_settings_json
-    from .compare import compare_arrays
-
     golden_dir = Path(golden_dir) if golden_dir is not None else find_golden_dir()
     manifest = read_manifest(golden_dir)
     suite = load_suite(suite_path)

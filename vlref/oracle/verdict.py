@@ -53,13 +53,18 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
+from ..io import output_dir, write_text
+from ..lights import pack_lights
 from ..lights.pack import I_KIND
 from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, lit_at_points
+from ..port import load_port, port_frame
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
+from ..render import prepare_frame
 from ..techniques import TECHNIQUES
 from .compare import Report, compare_arrays, margin
 from .edges import block_any, depth_discontinuities, dilate, edge_zone
 from .presets import tolerance
+from .report import json_ready, write_outputs
 
 __all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict", "judge",
            "shadow_zone", "write_verdict"]
@@ -282,8 +287,6 @@ def _scene_without_shadows(scene):
 def _nudged(port, frame_p, sign: int):
     """The port's frame with every light moved by ``sign · KNIFE_EDGE · (1 + |position|)`` along (1, 1, 1)/√3
     and every shadow-map distance scaled by ``1 + sign · KNIFE_EDGE``."""
-    from ..lights import pack_lights
-
     step = sign * KNIFE_EDGE
     scene = port.scene.replace(lights=tuple(
         dataclasses.replace(li, position=tuple(np.asarray(li.position, dtype=np.float64)
@@ -376,9 +379,6 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     :class:`InputError` on bad input (unknown preset, missing shadow map of a shadowed light, a pass naming
     no vlref buffer, sizes that differ).
     """
-    from ..port import load_port, port_frame
-    from ..render import prepare_frame
-
     port = load_port(manifest, overrides)
     own_preset = port.preset or preset or DEFAULT_PRESET
     for name in {own_preset, *(p.preset for p in port.passes if p.preset), *SCENE_PRESETS.values()}:
@@ -481,9 +481,6 @@ def _slug(name: str) -> str:
 def write_verdict(verdict: Verdict, comparisons: Sequence[_Comparison], out_dir) -> None:
     """verdict.json, index.html and each comparison's report folder (:func:`vlref.oracle.report.write_outputs`)
     into ``out_dir``, all or nothing."""
-    from ..io import output_dir, write_text
-    from .report import json_ready, write_outputs
-
     with output_dir(out_dir) as tmp:
         for c in comparisons:
             if c.report is not None:

@@ -11,7 +11,10 @@ from typing import Sequence
 import numpy as np
 
 from ..camera import Camera, linear_to_raw, look_rotation
+from ..io import output_dir, write_exr, write_text
 from ..lights.shadowmaps import CUBE_FACES, SHADOW_EXACT, SHADOW_NONE, cascade_splits, texel_grid
+from ..render import prepare_frame
+from ..scene import load_scene
 from ..techniques import TECHNIQUES
 from .decode import FAR_VALUE, NEAR_VALUE, flip_z
 from .manifest import bundled_name
@@ -113,10 +116,6 @@ def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_enco
     buffer of the technique, ``port_<buffer>.npy`` float32, preset ``float32``): vlref as a port of itself,
     for ``vlref verdict``.
     """
-    from ..io import output_dir, write_exr, write_text
-    from ..render import prepare_frame
-    from ..scene import load_scene
-
     scene = load_scene(scene_ref, overrides)
     frame = prepare_frame(scene)
     cam = frame.camera

@@ -12,21 +12,20 @@ from typing import Iterator, Sequence
 
 import numpy as np
 
+from ..geometry import build_geometry
+from ..geometry.raycast import GBuffer
+from ..io import output_dir, write_exr
+from ..lights import pack_lights
+from ..render import Frame, scene_hash
 from ..techniques import FRAME_BUFFERS, TECHNIQUES
 from .manifest import PortBuffers, load_port
 from .shadows import shadow_maps_from_port
 
 __all__ = ["port_frame", "march", "march_sequence", "march_port", "save_march"]
-"""Buffers :func:`save_march` writes without ``stages`` (besides ``depth``)."""
 
 
 def port_frame(port: PortBuffers):
     """A :class:`vlref.render.Frame` whose G-buffer depth, scene colour and shadow maps are the port's."""
-    from ..geometry import build_geometry
-    from ..geometry.raycast import GBuffer
-    from ..lights import pack_lights
-    from ..render import Frame
-
     cam = port.camera
     dirs = cam.ray_directions()
     distance = cam.eye_depth_to_distance(port.depth, dirs)
@@ -70,9 +69,6 @@ def save_march(out_dir, port: PortBuffers, buffers: dict[str, np.ndarray], stage
     """Write ``buffers`` of :func:`march` as float32 EXRs into ``out_dir`` (all or nothing): ``FRAME_BUFFERS``
     and ``depth``, or with ``stages`` every image buffer (the first 3 channels of wider ones); each file's
     metadata holds the scene hash, the technique and the manifest's absolute path."""
-    from ..io import output_dir, write_exr
-    from ..render import scene_hash
-
     meta = {"scene_hash": scene_hash(port.scene), "technique": port.scene.render.technique,
             "port_manifest": str(Path(port.source).resolve())}
     with output_dir(out_dir) as tmp:

@@ -17,8 +17,12 @@ import numpy as np
 
 from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings
 from ..errors import InputError
+from ..io import read_image
+from ..scene import load_scene
+from ..scene.animation import scene_at
 from ..scene.fields import F
 from ..scene.schema import build
+from ..tomlfile import read_toml
 from .decode import SHADOW_CONVENTIONS, PortShadowMap, PortTile, camera_from_matrices, decode_depth
 
 __all__ = ["PortManifest", "PortBuffers", "PortPass", "load_port", "bundled_name"]
@@ -176,8 +180,6 @@ class PortBuffers:
 
 def _read_single(path) -> np.ndarray:
     """The one-channel image at ``path`` as float64 (H, W)."""
-    from ..io import read_image
-
     return read_image(path, channels=1)[:, :, 0].astype(np.float64)
 
 
@@ -211,11 +213,6 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
     and its ``[animation]`` is evaluated at ``render.frame`` (:func:`vlref.scene.animation.scene_at`: the
     lights and medium of that frame; the camera is the manifest's when it has one).
     """
-    from ..io import read_image
-    from ..scene import load_scene
-    from ..scene.animation import scene_at
-    from ..tomlfile import read_toml
-
     path = Path(path)
     file = str(path)
     base = path.parent

@@ -28,6 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..io import write_exr, write_text
+from ..render import render
 from .quadrature import ReferenceResult, render_reference
 
 DEFAULT_STEPS = (4, 8, 16, 32, 64)
@@ -75,7 +77,6 @@ class BiasReport:
         """``bias.json`` (the numbers) and ``bias_error.exr`` (per-pixel error at the first step count)."""
         import json
 
-        from ..io import write_exr, write_text
         out = Path(out_dir)
         write_text(out / "bias.json", json.dumps(self.to_dict(), indent=2, default=float))
         write_exr(out / "bias_error.exr", self.error.astype(np.float32))
@@ -148,8 +149,6 @@ def technique_bias(scene, technique: str, steps_list=DEFAULT_STEPS, reference: R
     ``progress``: optional callable receiving stage names: the reference's (when computed here), then
     ``"<n> steps"`` after each render.
     """
-    from ..render import render
-
     ref = reference if reference is not None else render_reference(scene, rel_tol=rel_tol, progress=progress)
     rows, first, depth = [], None, None
     for steps in steps_list:

@@ -45,6 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
+from ..render import prepare_frame
 from . import integrand as ig
 from .integrand import WG, WGK, XGK
 from ..progress import row_bands
@@ -262,8 +263,6 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
     image bit for bit; :mod:`vlref.reference.tiles`).
     """
-    from ..render import prepare_frame
-
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
     scene = frame.scene  # evaluated at render.frame (animated scenes)

@@ -13,6 +13,7 @@ import time
 
 import numpy as np
 
+from ..cluster import Item, run_items
 from .quadrature import DEFAULT_ABS_TOL, ReferenceResult, render_reference
 
 __all__ = ["tile_rows", "render_reference_tiled"]
@@ -31,8 +32,6 @@ def render_reference_tiled(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAUL
     """:func:`render_reference` of ``scene`` solved in bands of ``rows_per_tile`` rows on ``scheduler``
     (:func:`vlref.cluster.run_items`); the arrays equal the untiled result bit for bit. ``stats``:
     ``intervals`` and ``unconverged`` summed over the tiles, ``seconds`` the wall time, ``tiles``."""
-    from ..cluster import Item, run_items
-
     start = time.perf_counter()
     bands = tile_rows(scene.render.height, rows_per_tile)
     items = [Item(f"rows {y0}-{y1}", render_reference, (scene, rel_tol, abs_tol),

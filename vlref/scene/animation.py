@@ -23,6 +23,8 @@ import dataclasses
 
 import numpy as np
 
+from ..errors import InputError
+
 __all__ = ["scene_at", "check_animation", "track_value"]
 
 _CAMERA = ("position", "look_at", "rotation", "fov")
@@ -141,6 +143,5 @@ def scene_at(scene, frame: int | None = None):
             medium = dataclasses.replace(medium, **{name: value})
     problem = camera.check()
     if problem:
-        from ..errors import InputError
         raise InputError(scene.source or "<scene>", f"animation (frame {frame}): camera.{problem[0]}", problem[1])
     return scene.replace(render=render, camera=camera, medium=medium, lights=tuple(lights), animation=None)

@@ -16,6 +16,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Optional
 
+from .animation import check_animation
 from .fields import F
 from .technique_params import TechniqueParams
 
@@ -26,7 +27,10 @@ TECHNIQUES = tuple(f.name for f in dataclasses.fields(TechniqueParams))
 SAMPLINGS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 RESOLUTIONS = ("full", "half", "third", "quarter")
 ATTENUATIONS = ("inverse_square", "unity", "windowed")
+"""The distance laws of point and spot lights: the one list (:mod:`vlref.lights.attenuation` numbers them in
+this order and evaluates each; a new law is a name here and its branch there)."""
 CONE_LAWS = ("unity", "linear", "smoothstep")
+"""The spot cone laws: the one list (:mod:`vlref.lights.cone` numbers them in this order and evaluates each)."""
 
 
 @dataclass(frozen=True)
@@ -311,7 +315,6 @@ class Scene:
         if not self.lights:
             return "lights", "a scene needs at least one light"
         if self.animation is not None:
-            from .animation import check_animation
             return check_animation(self)
         return None
 

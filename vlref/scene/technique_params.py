@@ -6,6 +6,10 @@ quirk (``docs/TECHNIQUES.md`` lists them all) default to the source's behaviour;
 its other value neutralises that quirk. ``docs/TECHNIQUES.md`` gives each parameter's origin
 (file / section of ``docs/SOURCES.md`` or of the thesis). Values a source does
 not state are marked ``[U]`` and are inputs with a documented default.
+
+:func:`resolved` reads the settings a technique may default itself (``render.steps``, ``sampling``,
+``resolution``): the scene's value, else the technique's own field of that name, else
+:data:`RESOLVED_DEFAULTS`.
 """
 
 from __future__ import annotations
@@ -14,6 +18,9 @@ from dataclasses import dataclass, field
 from typing import Optional
 
 from .fields import F
+
+__all__ = ["PhysicalParams", "KillzoneParams", "SlightlyMadParams", "UrpParams", "RadialParams", "FroxelParams",
+           "TechniqueParams", "RESOLVED_DEFAULTS", "resolved"]
 
 
 @dataclass(frozen=True)
@@ -209,3 +216,17 @@ class TechniqueParams:
     def of(self, name: str):
         """The parameter block of technique ``name``."""
         return getattr(self, name)
+
+
+RESOLVED_DEFAULTS = {"steps": 32, "sampling": "none", "resolution": "full"}
+"""``render.steps``/``sampling``/``resolution`` of a technique whose parameter class sets none."""
+
+
+def resolved(scene, name: str):
+    """``render.steps``/``sampling``/``resolution`` (``name``), or the scene's technique's own default
+    (its ``[techniques.NAME]`` field of that name) when the scene leaves it unset, else :data:`RESOLVED_DEFAULTS`."""
+    value = getattr(scene.render, name)
+    if value is not None:
+        return value
+    default = getattr(scene.techniques.of(scene.render.technique), name, None)
+    return RESOLVED_DEFAULTS[name] if default is None else default

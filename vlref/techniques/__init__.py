@@ -34,8 +34,9 @@ from typing import Callable, Optional
 import numpy as np
 
 from ..scene import bundled_scenes, load_scene
-from ..scene.technique_params import (FroxelParams, KillzoneParams, PhysicalParams, RadialParams, SlightlyMadParams,
-                                      UrpParams)
+from ..scene.technique_params import (RESOLVED_DEFAULTS, FroxelParams, KillzoneParams, PhysicalParams, RadialParams,
+                                      SlightlyMadParams, UrpParams, resolved)
+from . import froxel, killzone, physical, radial, slightlymad, urp
 
 __all__ = ["Technique", "TECHNIQUES", "Buffers", "FRAME_BUFFERS", "RESOLVED_DEFAULTS", "resolved", "every_scene",
            "APPLIES", "suitable_scenes"]
@@ -45,20 +46,6 @@ Buffers = dict[str, np.ndarray]
 
 FRAME_BUFFERS = ("final", "inscatter", "transmittance")
 """The buffers every technique returns, whatever its passes."""
-
-RESOLVED_DEFAULTS = {"steps": 32, "sampling": "none", "resolution": "full"}
-"""``render.steps``/``sampling``/``resolution`` of a technique whose parameter class sets none."""
-
-
-def resolved(scene, name: str):
-    """``render.steps``/``sampling``/``resolution`` (``name``), or the scene's technique's own default
-    (its ``[techniques.NAME]`` field of that name) when the scene leaves it unset, else :data:`RESOLVED_DEFAULTS`."""
-    value = getattr(scene.render, name)
-    if value is not None:
-        return value
-    default = getattr(scene.techniques.of(scene.render.technique), name, None)
-    return RESOLVED_DEFAULTS[name] if default is None else default
-
 
 def every_scene(scene) -> bool:
     """The applicability rule of a technique that lights any light type: every scene."""
@@ -81,9 +68,6 @@ class Technique:
     bytes_per_pixel: int
     notes: Optional[Callable[..., list]] = None
 
-
-# The technique modules import resolved() from this package: they are imported once it is defined.
-from . import froxel, killzone, physical, radial, slightlymad, urp  # noqa: E402
 
 TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     # bytes_per_pixel: measured peaks 228, 352, 294, 333, 292 rounded up; froxel: the largest (not measured)

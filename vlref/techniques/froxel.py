@@ -32,7 +32,7 @@ from ..froxel.kernels import froxel_apply, froxel_integrate, froxel_scatter
 from ..froxel.temporal import History, reproject_blend, tile_depth
 from ..medium import pack_medium
 from ..post.composite import composite_physical
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "grid_bounds", "notes"]
 

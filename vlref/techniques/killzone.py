@@ -29,7 +29,7 @@ from ..post.composite import composite_physical
 from ..post.downsample import downsample_min
 from ..post.resolution import low_res_size
 from ..post.upsample import thesis_upsample
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "light_resolutions"]
 

@@ -23,7 +23,7 @@ from ..march.physical import march_physical
 from ..medium import pack_medium
 from ..post.composite import composite_physical, sum_lights
 from ..progress import bands_for, row_bands
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
 

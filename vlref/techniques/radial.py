@@ -30,6 +30,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import camera_from_settings
+from ..errors import InputError
 from ..geometry import raycast, shadow_transmittance
 from ..post.composite import composite_add
 from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, occlusion_opaque,
@@ -74,8 +75,6 @@ def radial_light(scene) -> int:
     p = scene.techniques.radial
     if p.light >= 0:
         if p.light >= len(scene.lights):
-            from ..errors import InputError
-
             raise InputError(scene.source or "<scene>", "techniques.radial.light",
                              f"no light {p.light} (the scene has {len(scene.lights)})")
         return p.light

@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from ..camera import linear_to_raw, raw_to_linear
+from ..camera import linear_to_raw, look_rotation, raw_to_linear
 from ..errors import InputError
 from ..lights.attenuation import ATTENUATION_CODES, UNITY
 from ..lights.cone import CONE_CODES
@@ -32,11 +32,11 @@ from ..march.slightlymad import (CONE_COOKIE_ONLY, VlLight, VlMarch, dither_offs
 from ..medium import pack_medium
 from ..post.blur import vl_blur_pass
 from ..post.composite import FP16_MAX, blend_add_fp16, composite_vl, fp16
-from ..post.downsample import downsample_vl
+from ..post.downsample import downsample_max, downsample_min, downsample_vl
 from ..post.resolution import low_res_size
 from ..post.upsample import vl_upsample
 from ..scene.model import Cookie, HeightFog, Medium, Noise
-from . import resolved
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "notes", "light_segments", "vl_medium", "srgb_to_linear", "cone_mesh_planes"]
 
@@ -92,8 +92,6 @@ def cone_mesh_planes(light) -> np.ndarray:
     distance ``R`` along the axis, ``θc = (spot_angle + 1°)/2``; ring vertex ``k`` at angle
     ``2πk/16`` with light-local ``x = -cos, y = sin``.
     """
-    from ..camera import look_rotation
-
     rot = look_rotation(light.direction)
     r = light.range * math.tan(math.radians(light.spot_angle + 1.0) / 2.0)
     ang = 2.0 * math.pi * np.arange(SPOT_MESH_SIDES + 1) / SPOT_MESH_SIDES
@@ -127,8 +125,6 @@ def _convex_interval(planes, cam, dirs):
 
 def _cone_interval(light, cam, dirs, half_angle_deg):
     """Entry and exit of the analytic cone of half-angle ``half_angle_deg`` capped at ``range`` along the axis."""
-    from ..camera import look_rotation
-
     a = look_rotation(light.direction)[:, 2]
     p = np.asarray(light.position, dtype=np.float64)
     cos_h = math.cos(math.radians(half_angle_deg))
@@ -165,8 +161,6 @@ def light_segments(light, cam, dirs, t_surf, params, max_ray_length):
         inside = np.sum((p - cam) ** 2) < (R + 1.0) ** 2
         a_exit = leave
     else:
-        from ..camera import look_rotation
-
         axis = look_rotation(light.direction)[:, 2]
         v = cam - p
         dist = np.linalg.norm(v)
@@ -197,8 +191,6 @@ def _march_depth(frame, p, resolution):
     if p.depth_downsample == "chessboard":
         raw_lo = downsample_vl(raw, resolution, p.uv_origin)
     else:
-        from ..post.downsample import downsample_max, downsample_min
-
         fn = downsample_min if p.depth_downsample == "min" else downsample_max
         raw_lo = raw if resolution == "full" else fn(raw, resolution)
     return np.minimum(raw_to_linear(raw_lo, cam.near, cam.far, p.depth_convention), cam.far)

@@ -20,6 +20,7 @@ import numpy as np
 
 from ..camera import linear_to_raw, raw_to_linear
 from ..errors import InputError
+from ..io import read_image
 from ..lights.pack import F_DX, F_DZ
 from ..march.urp import urp_hash, urp_march
 from ..post.blur import urp_article_blur_pass
@@ -27,7 +28,8 @@ from ..post.composite import composite_urp, unorm16
 from ..post.downsample import downsample_point
 from ..post.resolution import low_res_size
 from ..post.upsample import urp_upsample
-from . import resolved
+from ..scene import bundled_scenes, load_scene
+from ..scene.technique_params import resolved
 
 __all__ = ["render", "main_light", "has_main_light", "load_jitter"]
 
@@ -37,11 +39,10 @@ def main_light(scene) -> int:
     for i, light in enumerate(scene.lights):
         if light.type == "directional":
             return i
-    from . import suitable_scenes  # the registry imports this module: imported when needed
-
+    suitable = [name for name, path in bundled_scenes().items() if has_main_light(load_scene(path))]
     raise InputError(scene.source or "<scene>", "render.technique",
                      "\"urp\" needs a directional light (the URP main light); the scene has none (bundled scenes "
-                     f"with one: {', '.join(suitable_scenes('urp'))})")
+                     f"with one: {', '.join(suitable)})")
 
 
 def has_main_light(scene) -> bool:
@@ -53,7 +54,6 @@ def has_main_light(scene) -> bool:
 def load_jitter(path: str, width: int, height: int, file: str = "<scene>") -> np.ndarray:
     """An injected hash buffer (.npy, or single-channel .exr), (height, width) in [0, 1), row 0 on top."""
     key = "techniques.urp.jitter_path"
-    from ..io import read_image
 
     try:
         a = read_image(path, channels=1)
