@@ -11,6 +11,7 @@ Playwright's own browser download is not used): .ci/run installs both; elsewhere
 ``VLREF_SCREENSHOTS=DIR`` also saves the screenshots of docs/PORTING.md there (docs/images).
 """
 
+import io
 import json
 import os
 import re
@@ -46,11 +47,18 @@ def browser():
         b.close()
 
 
+def _save_shot(data: bytes, name: str) -> None:
+    """Save a screenshot for the docs, as a 256-colour PNG (a third of the size)."""
+    from PIL import Image
+
+    Path(SHOTS).mkdir(parents=True, exist_ok=True)
+    Image.open(io.BytesIO(data)).convert("RGB").quantize(256).save(Path(SHOTS, name), optimize=True)
+
+
 def _shot(element, name):
     data = element.screenshot()
     if SHOTS:
-        Path(SHOTS).mkdir(parents=True, exist_ok=True)
-        Path(SHOTS, name).write_bytes(data)
+        _save_shot(data, name)
     return data
 
 
@@ -157,7 +165,140 @@ def test_report_in_a_browser(browser, report_page):
         page.keyboard.press("0")
         page.mouse.move(box["x"] + 50.5 * scale, box["y"] + 25.5 * scale)
         page.set_viewport_size({"width": 1100, "height": 700})
-        Path(SHOTS, "report.png").write_bytes(page.screenshot(clip={"x": 0, "y": 0, "width": 1100, "height": 700}))
+        _save_shot(page.screenshot(clip={"x": 0, "y": 0, "width": 1100, "height": 700}), "report.png")
         Path(SHOTS, "report_ref.png").unlink()
     assert errors == []
+    page.close()
+
+
+# --------------------------------------------------------------------------- the parameter explorer in JupyterLab
+
+EXPLORER = ROOT / "notebooks" / "02_parameter_explorer.ipynb"
+TOKEN = "vlref-browser-test"
+TIME_LIMIT = 150.0   # seconds from opening JupyterLab to the re-rendered image (about 40 s on 2 loaded cores)
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def jupyter(tmp_path_factory):
+    """A JupyterLab server on localhost serving a copy of notebook 02 (its outputs are not saved back)."""
+    pytest.importorskip("jupyterlab", reason="jupyterlab is not installed (pip install jupyterlab; the test extra "
+                        "has it)")
+    from urllib.request import Request, urlopen
+
+    home = tmp_path_factory.mktemp("jupyter")
+    shutil.copy(EXPLORER, home / EXPLORER.name)
+    env = {k: v for k, v in os.environ.items() if k not in ("CI", "VLREF_STATIC")}  # live widgets
+    env.update(JUPYTER_CONFIG_DIR=str(home / "config"), JUPYTER_RUNTIME_DIR=str(home / "runtime"),
+               JUPYTERLAB_WORKSPACES_DIR=str(home / "workspaces"), JUPYTERLAB_SETTINGS_DIR=str(home / "settings"),
+               MPLBACKEND="module://matplotlib_inline.backend_inline")
+    # every cell rendered (no windowing: an output that grows is painted at once), no news question
+    for plugin, settings in (("notebook-extension/tracker", {"windowingMode": "none"}),
+                             ("apputils-extension/notification", {"fetchNews": "false"})):
+        path = home / "settings" / "@jupyterlab" / f"{plugin}.jupyterlab-settings"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(settings))
+    port = _free_port()
+    server = subprocess.Popen(
+        [sys.executable, "-m", "jupyterlab", "--no-browser", "--allow-root", "--ip=127.0.0.1", f"--port={port}",
+         f"--IdentityProvider.token={TOKEN}", f"--ServerApp.root_dir={home}", "--LabApp.news_url=",
+         "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate"],
+        env=env, stdout=subprocess.DEVNULL, stderr=open(home / "server.log", "w"))
+    url = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 60
+        while True:
+            try:
+                urlopen(f"{url}/api/status?token={TOKEN}", timeout=2).read()
+                break
+            except OSError:
+                if server.poll() is not None or time.monotonic() > deadline:
+                    pytest.fail(f"JupyterLab did not start: {(home / 'server.log').read_text()[-2000:]}")
+                time.sleep(0.5)
+        # the notebook's session and kernel, started before the page opens (no kernel-selection dialog)
+        session = json.dumps({"path": EXPLORER.name, "type": "notebook", "name": EXPLORER.name,
+                              "kernel": {"name": "python3"}}).encode()
+        urlopen(Request(f"{url}/api/sessions?token={TOKEN}", data=session, method="POST",
+                        headers={"Content-Type": "application/json"}), timeout=30).read()
+        yield url
+    finally:
+        server.terminate()
+        try:
+            server.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            server.kill()
+            server.wait()
+
+
+def _render_count(page) -> int:
+    found = re.findall(r"render #(\d+):", page.locator(".jp-Notebook").inner_text())
+    return int(found[-1]) if found else 0
+
+
+IMAGE = ".jupyter-widgets .jp-OutputArea-output img"
+
+
+def _explorer_image(page) -> np.ndarray:
+    """The explorer's figure as painted on the page (RGB), once it is decoded and painted (not blank)."""
+    from PIL import Image
+
+    page.wait_for_function(f"(() => {{ const all = document.querySelectorAll({IMAGE!r}); const e = all[all.length - 1];"
+                           f" return e && e.complete && e.naturalWidth > 0; }})()", timeout=30_000)
+    image = page.locator(IMAGE).last
+    image.evaluate("e => e.decode()")
+    deadline = time.monotonic() + 15
+    while True:   # a fresh image is painted a frame or two after it decodes
+        rgb = np.asarray(Image.open(io.BytesIO(image.screenshot())).convert("RGB"), dtype=float)
+        if rgb.std() > 10 or time.monotonic() > deadline:
+            return rgb
+        time.sleep(0.2)
+
+
+def test_explorer_slider_rerenders(browser, jupyter):
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
+    start = time.monotonic()
+    page = browser.new_page(viewport={"width": 1280, "height": 1000})
+    page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
+    page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=60_000)
+    try:   # JupyterLab may ask which kernel to start although the notebook names one: take its choice
+        page.get_by_role("button", name="Select", exact=True).click(timeout=10_000)
+    except PlaywrightTimeout:
+        pass
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=60_000)
+    page.get_by_role("menuitem", name="Run", exact=True).click()
+    page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+    page.wait_for_function("document.querySelector('.jp-Notebook').innerText.includes('render #1:')",
+                           timeout=120_000)
+    assert _render_count(page) == 1
+    before = _explorer_image(page)
+    assert before.std() > 10   # a picture, not a blank area
+
+    slider = page.locator(".widget-slider", has_text="scattering σs")
+    readout = slider.locator(".widget-readout")
+    readout.click()
+    page.keyboard.press("Control+A")
+    page.keyboard.type("0.3")
+    page.keyboard.press("Enter")
+    page.wait_for_function("document.querySelector('.jp-Notebook').innerText.includes('render #2:')",
+                           timeout=60_000)
+    assert _render_count(page) == 2
+    assert readout.inner_text().startswith("0.30")
+    after = _explorer_image(page)
+    assert after.std() > 10
+    # the scattering went from 0.08 to 0.3 per metre: the figure changed (its size too, with the tight layout)
+    assert after.shape != before.shape or np.abs(after - before).mean() > 1
+    seconds = time.monotonic() - start
+    assert seconds < TIME_LIMIT, seconds
+    if SHOTS:   # the whole explorer in view (a tall window)
+        page.set_viewport_size({"width": 1280, "height": 1500})
+        widget = page.locator(".jupyter-widgets.widget-vbox").last
+        widget.scroll_into_view_if_needed()
+        _explorer_image(page)
+        _save_shot(page.screenshot(clip=widget.bounding_box()), "explorer.png")
     page.close()
