@@ -134,6 +134,9 @@ static render with their default values."""),
     ("code", SETUP + """
 import itertools
 
+from IPython.display import display
+from matplotlib.figure import Figure
+
 from vlref.errors import InputError
 from vlref.notebook import Choice, PreviewRenderer, Slider, Toggle, interact_or_static, live_widgets, \\
     scaled_light_intensity, time_call
@@ -250,7 +253,7 @@ def show(scene, technique, scattering, absorption, anisotropy, power, steps, sam
         return None
     print(f"render #{next(renders)}: {scene}, {technique}, {1e3 * seconds:.0f} ms")
     exposure = base_exposure(scene, buffers) * 2.0 ** exposure_ev
-    fig = plt.figure(figsize=(11, 6.4))
+    fig = Figure(figsize=(11, 6.4))   # not pyplot's: widget callbacks run in a kernel subshell thread, and
     grid = fig.add_gridspec(2, 2, height_ratios=(2.2, 1), width_ratios=(2.4, 1))
     ax = fig.add_subplot(grid[0, :])
     ax.imshow(display_rgb(buffers["final"], exposure))
@@ -268,8 +271,8 @@ def show(scene, technique, scattering, absorption, anisotropy, power, steps, sam
     polar.plot(theta, 4.0 * np.pi * hg_array(np.cos(theta), anisotropy))
     polar.set_title(f"HG phase × 4π, g = {anisotropy:+.2f}", fontsize=10)
     polar.set_yticklabels([])
-    fig.tight_layout()
-    plt.show()
+    fig.tight_layout()                # pyplot's close('all') of a cell ending there blanked a figure being drawn
+    display(fig)
     return buffers
 
 

@@ -251,9 +251,11 @@ def _explorer_image(page) -> np.ndarray:
                            f" return e && e.complete && e.naturalWidth > 0; }})()", timeout=30_000)
     image = page.locator(IMAGE).last
     image.evaluate("e => e.decode()")
+    image.scroll_into_view_if_needed()
     deadline = time.monotonic() + 15
     while True:   # a fresh image is painted a frame or two after it decodes
-        rgb = np.asarray(Image.open(io.BytesIO(image.screenshot())).convert("RGB"), dtype=float)
+        shot = page.screenshot(clip=image.bounding_box())   # what the window shows (an element screenshot of an
+        rgb = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"), dtype=float)   # output scrolled off is blank)
         if rgb.std() > 10 or time.monotonic() > deadline:
             return rgb
         time.sleep(0.2)
@@ -263,7 +265,7 @@ def test_explorer_slider_rerenders(browser, jupyter):
     from playwright.sync_api import TimeoutError as PlaywrightTimeout
 
     start = time.monotonic()
-    page = browser.new_page(viewport={"width": 1280, "height": 1000})
+    page = browser.new_page(viewport={"width": 1280, "height": 1500})
     page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
     page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=60_000)
     try:   # JupyterLab may ask which kernel to start although the notebook names one: take its choice
@@ -295,8 +297,7 @@ def test_explorer_slider_rerenders(browser, jupyter):
     assert after.shape != before.shape or np.abs(after - before).mean() > 1
     seconds = time.monotonic() - start
     assert seconds < TIME_LIMIT, seconds
-    if SHOTS:   # the whole explorer in view (a tall window)
-        page.set_viewport_size({"width": 1280, "height": 1500})
+    if SHOTS:
         widget = page.locator(".jupyter-widgets.widget-vbox").last
         widget.scroll_into_view_if_needed()
         _explorer_image(page)
