@@ -98,3 +98,30 @@ def test_golden_verify_junit_one_case_per_buffer(tmp_path):
     assert failure.get("message").startswith("inscatter: differs beyond preset float32")
     assert float(dict(line.split(" = ") for line in failure.text.splitlines())["frac_failing"]) > 0.001
     assert all(cases[f"{ONE} {b}"].find("failure") is None for b in record["files"] if b != "inscatter")
+
+
+def test_verdict_junit_one_case_per_comparison(tmp_path):
+    """vlref exported as its own port with its inscatter pass scaled by 1.5: `vlref verdict --junit` has one case
+    per comparison of verdict.json, the inscatter case failing with verdict.json's reason and report path."""
+    from vlref.port.export import export_port
+
+    port = export_port("pillars", tmp_path / "port", ["render.width=64", "render.height=36", "render.steps=8",
+                                                      "lights.0.shadows.resolution=128"], passes=True).parent
+    path = port / "port_inscatter.npy"
+    np.save(path, np.load(path) * 1.5)
+    out, xml = tmp_path / "verdict", tmp_path / "verdict.xml"
+    assert main(["verdict", str(port / "port.toml"), "-o", str(out), "-q", "--junit", str(xml)]) == 1
+    assert junit_schema.problems(xml.read_text()) == []
+    passes = json.loads((out / "verdict.json").read_text())["passes"]
+    root, cases = _cases(xml)
+    assert list(cases) == [f"{p['group']}: {p['name']}" for p in passes]
+    assert root.find("testsuite").get("failures") == str(sum(not p["passed"] for p in passes)) != "0"
+    for p in passes:
+        failure = cases[f"{p['group']}: {p['name']}"].find("failure")
+        assert (failure is None) == p["passed"]
+        if failure is not None:
+            assert failure.get("message") == p["reason"] and f"report: {p['report']}" in failure.text
+            assert Path(p["report"]).is_file()
+    bad = cases[next(f"{p['group']}: {p['name']}" for p in passes if p["name"] == "inscatter")].find("failure")
+    lines = dict(line.split(" = ") for line in bad.text.splitlines() if " = " in line)
+    assert int(lines["failing_pixels"]) > 0 and any(k.startswith("margins.") for k in lines)   # nested: flattened

@@ -32,8 +32,8 @@ __all__ = ["Case", "report_case", "junit_xml", "write_junit"]
 
 @dataclass(frozen=True)
 class Case:
-    """One JUnit test case: ``name`` (e.g. ``pillars/killzone final``), ``passed``, ``metrics`` (flat, numbers or
-    strings), ``report`` (path of the comparison's report.html, or None), ``reason`` (why it failed; "" when it
+    """One JUnit test case: ``name`` (e.g. ``pillars/killzone final``), ``passed``, ``metrics`` (numbers or
+    strings; nested mappings are written ``outer.inner = value``), ``report`` (path of the comparison's report.html, or None), ``reason`` (why it failed; "" when it
     passed), ``seconds`` (0 when unknown)."""
 
     name: str
@@ -64,8 +64,17 @@ def _text(value) -> str:
     return str(value)
 
 
+def _flat(metrics: Mapping, prefix: str = ""):
+    """``(key, value)`` pairs of ``metrics``, nested mappings spelled ``outer.inner``."""
+    for k, v in metrics.items():
+        if isinstance(v, Mapping):
+            yield from _flat(v, f"{prefix}{k}.")
+        else:
+            yield f"{prefix}{k}", v
+
+
 def _details(case: Case) -> str:
-    lines = [f"{k} = {_text(v)}" for k, v in case.metrics.items()]
+    lines = [f"{k} = {_text(v)}" for k, v in _flat(case.metrics)]
     if case.report:
         lines.append(f"report: {case.report}")
     return "\n".join(lines)
