@@ -197,8 +197,9 @@ def jupyter(tmp_path_factory):
     env.update(JUPYTER_CONFIG_DIR=str(home / "config"), JUPYTER_RUNTIME_DIR=str(home / "runtime"),
                JUPYTERLAB_WORKSPACES_DIR=str(home / "workspaces"), JUPYTERLAB_SETTINGS_DIR=str(home / "settings"),
                MPLBACKEND="module://matplotlib_inline.backend_inline")
-    # every cell rendered (no windowing: an output that grows is painted at once), no news question
-    for plugin, settings in (("notebook-extension/tracker", {"windowingMode": "none"}),
+    # every cell rendered (no windowing: an output that grows is painted at once), the notebook's kernel started
+    # without asking, no news question
+    for plugin, settings in (("notebook-extension/tracker", {"windowingMode": "none", "autoStartDefaultKernel": True}),
                              ("apputils-extension/notification", {"fetchNews": "false"})):
         path = home / "settings" / "@jupyterlab" / f"{plugin}.jupyterlab-settings"
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -262,16 +263,10 @@ def _explorer_image(page) -> np.ndarray:
 
 
 def test_explorer_slider_rerenders(browser, jupyter):
-    from playwright.sync_api import TimeoutError as PlaywrightTimeout
-
     start = time.monotonic()
     page = browser.new_page(viewport={"width": 1280, "height": 1500})
     page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
     page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=60_000)
-    try:   # JupyterLab may ask which kernel to start although the notebook names one: take its choice
-        page.get_by_role("button", name="Select", exact=True).click(timeout=10_000)
-    except PlaywrightTimeout:
-        pass
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=60_000)
     page.get_by_role("menuitem", name="Run", exact=True).click()
     page.get_by_role("menuitem", name="Run All Cells", exact=True).click()

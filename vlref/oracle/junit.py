@@ -33,8 +33,8 @@ __all__ = ["Case", "report_case", "junit_xml", "write_junit"]
 @dataclass(frozen=True)
 class Case:
     """One JUnit test case: ``name`` (e.g. ``pillars/killzone final``), ``passed``, ``metrics`` (numbers or
-    strings; nested mappings are written ``outer.inner = value``), ``report`` (path of the comparison's report.html, or None), ``reason`` (why it failed; "" when it
-    passed), ``seconds`` (0 when unknown)."""
+    strings; nested mappings are written ``outer.inner = value``), ``report`` (path of the comparison's
+    report.html, or None), ``reason`` (why it failed; "" when it passed), ``seconds`` (0 when unknown)."""
 
     name: str
     passed: bool

@@ -228,7 +228,8 @@ function readout(vx, vy) {
   out.dataset.x = x; out.dataset.y = y;
   out.dataset.state = compared ? (failing ? "fail" : "pass") : "masked";
   document.getElementById("r-xy").textContent = `x ${x}, y ${y}`;
-  ["ref", "test", "err", "bound"].forEach((k, j) => document.getElementById(`r-${k}`).textContent = cells[j].join(", "));
+  ["ref", "test", "err", "bound"].forEach(
+    (k, j) => document.getElementById(`r-${k}`).textContent = cells[j].join(", "));
   document.getElementById("r-state").textContent =
     compared ? (failing ? "FAILS: beyond the bound" : "within the bound") : "not compared (masked)";
 }
@@ -294,7 +295,8 @@ figure {{ margin: 0; }} figcaption {{ font-size: 0.9em; margin-bottom: 0.3em; }}
         border: 1px solid #d0d7de; cursor: crosshair; background: #282828; }}
 .view img {{ position: absolute; left: 0; top: 0; transform-origin: 0 0; image-rendering: pixelated;
             width: {w}px; height: {h}px; transform: scale({view_w / w:.6g}); }}
-#readout {{ position: sticky; top: 0; z-index: 1; width: max-content; font: 0.85em ui-monospace, monospace; margin: 0.6em 0; padding: 0.4em 0.6em; background: #f6f8fa;
+#readout {{ position: sticky; top: 0; z-index: 1; width: max-content; font: 0.85em ui-monospace, monospace;
+           margin: 0.6em 0; padding: 0.4em 0.6em; background: #f6f8fa;
            border: 1px solid #d0d7de; display: grid; grid-template-columns: max-content auto; gap: 0 1em; }}
 #readout[data-state=fail] #r-state {{ color: #cf222e; font-weight: bold; }}
 #readout[data-state=pass] #r-state {{ color: #1a7f37; }}
