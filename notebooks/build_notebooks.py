@@ -132,9 +132,10 @@ on the medium. The reused frame gives bit-identical buffers to a full `render`
 Without a live kernel (CI, `pytest --nbmake`, or `VLREF_STATIC=1`) the controls fall back to one
 static render with their default values."""),
     ("code", SETUP + """
+import io
 import itertools
 
-from IPython.display import display
+from IPython.display import Image, display
 from matplotlib.figure import Figure
 
 from vlref.errors import InputError
@@ -271,8 +272,10 @@ def show(scene, technique, scattering, absorption, anisotropy, power, steps, sam
     polar.plot(theta, 4.0 * np.pi * hg_array(np.cos(theta), anisotropy))
     polar.set_title(f"HG phase × 4π, g = {anisotropy:+.2f}", fontsize=10)
     polar.set_yticklabels([])
-    fig.tight_layout()                # pyplot's close('all') of a cell ending there blanked a figure being drawn
-    display(fig)
+    fig.tight_layout()                # pyplot's close('all') of a cell ending there blanked a figure being drawn;
+    png = io.BytesIO()                # PNG bytes: no dependence on matplotlib-inline's figure formatter
+    fig.savefig(png, format="png", dpi=80)
+    display(Image(png.getvalue()))
     return buffers
 
 

@@ -189,7 +189,7 @@ def jupyter(tmp_path_factory):
     """A JupyterLab server on localhost serving a copy of notebook 02 (its outputs are not saved back)."""
     pytest.importorskip("jupyterlab", reason="jupyterlab is not installed (pip install jupyterlab; the test extra "
                         "has it)")
-    from urllib.request import Request, urlopen
+    from urllib.request import urlopen
 
     home = tmp_path_factory.mktemp("jupyter")
     shutil.copy(EXPLORER, home / EXPLORER.name)
@@ -221,11 +221,6 @@ def jupyter(tmp_path_factory):
                 if server.poll() is not None or time.monotonic() > deadline:
                     pytest.fail(f"JupyterLab did not start: {(home / 'server.log').read_text()[-2000:]}")
                 time.sleep(0.5)
-        # the notebook's session and kernel, started before the page opens (no kernel-selection dialog)
-        session = json.dumps({"path": EXPLORER.name, "type": "notebook", "name": EXPLORER.name,
-                              "kernel": {"name": "python3"}}).encode()
-        urlopen(Request(f"{url}/api/sessions?token={TOKEN}", data=session, method="POST",
-                        headers={"Content-Type": "application/json"}), timeout=30).read()
         yield url
     finally:
         server.terminate()
@@ -262,14 +257,26 @@ def _explorer_image(page) -> np.ndarray:
         time.sleep(0.2)
 
 
+STARTED = r"[...document.querySelectorAll('.jp-InputPrompt')].some(e => /\[(\*|\d+)\]/.test(e.textContent))"
+"""A code cell shows ``[*]`` (running) or ``[n]`` (ran): the notebook is executing."""
+
+
 def test_explorer_slider_rerenders(browser, jupyter):
+    from playwright.sync_api import TimeoutError as PlaywrightTimeout
+
     start = time.monotonic()
     page = browser.new_page(viewport={"width": 1280, "height": 1500})
     page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
     page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=60_000)
     page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=60_000)
-    page.get_by_role("menuitem", name="Run", exact=True).click()
-    page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+    for _ in range(3):   # a "Run All" sent while the kernel is still connecting is lost: send it again
+        page.get_by_role("menuitem", name="Run", exact=True).click()
+        page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
+        try:
+            page.wait_for_function(STARTED, timeout=20_000)
+            break
+        except PlaywrightTimeout:
+            continue
     page.wait_for_function("document.querySelector('.jp-Notebook').innerText.includes('render #1:')",
                            timeout=120_000)
     assert _render_count(page) == 1
