@@ -132,6 +132,12 @@ on the medium. The reused frame gives bit-identical buffers to a full `render`
 Without a live kernel (CI, `pytest --nbmake`, or `VLREF_STATIC=1`) the controls fall back to one
 static render with their default values."""),
     ("code", SETUP + """
+import io
+import itertools
+
+from IPython.display import Image, display
+from matplotlib.figure import Figure
+
 from vlref.errors import InputError
 from vlref.notebook import Choice, PreviewRenderer, Slider, Toggle, interact_or_static, live_widgets, \\
     scaled_light_intensity, time_call
@@ -214,7 +220,8 @@ print("frame rebuilds so far:", preview.rebuilds)"""),
 ## The explorer
 
 Sliders update the image when released. The red line on the image marks the scanline plotted
-below it."""),
+below it; the line above the image counts the renders (`render #N`), so a change that did not re-render
+shows."""),
     ("code", """\
 CONTROLS = {
     "scene": Choice(tuple(SCENES), "pillars"),
@@ -231,6 +238,7 @@ CONTROLS = {
     "exposure_ev": Slider(-4.0, 4.0, 0.0, step=0.25, description="exposure (EV)"),
     "row": Slider(0, 179, 100, integer=True, description="scanline row"),
 }
+renders = itertools.count(1)
 
 
 def show(scene, technique, scattering, absorption, anisotropy, power, steps, sampling, resolution, blur, vl_depth,
@@ -244,8 +252,9 @@ def show(scene, technique, scattering, absorption, anisotropy, power, steps, sam
     except InputError as exc:
         print("cannot render this combination:", exc)
         return None
+    print(f"render #{next(renders)}: {scene}, {technique}, {1e3 * seconds:.0f} ms")
     exposure = base_exposure(scene, buffers) * 2.0 ** exposure_ev
-    fig = plt.figure(figsize=(11, 6.4))
+    fig = Figure(figsize=(11, 6.4))   # not pyplot's: widget callbacks run in a kernel subshell thread, and
     grid = fig.add_gridspec(2, 2, height_ratios=(2.2, 1), width_ratios=(2.4, 1))
     ax = fig.add_subplot(grid[0, :])
     ax.imshow(display_rgb(buffers["final"], exposure))
@@ -263,8 +272,10 @@ def show(scene, technique, scattering, absorption, anisotropy, power, steps, sam
     polar.plot(theta, 4.0 * np.pi * hg_array(np.cos(theta), anisotropy))
     polar.set_title(f"HG phase × 4π, g = {anisotropy:+.2f}", fontsize=10)
     polar.set_yticklabels([])
-    fig.tight_layout()
-    plt.show()
+    fig.tight_layout()                # pyplot's close('all') of a cell ending there blanked a figure being drawn;
+    png = io.BytesIO()                # PNG bytes: no dependence on matplotlib-inline's figure formatter
+    fig.savefig(png, format="png", dpi=80)
+    display(Image(png.getvalue()))
     return buffers
 
 

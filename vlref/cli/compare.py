@@ -9,8 +9,9 @@ from pathlib import Path
 from typing import Sequence
 
 from ..errors import InputError
-from ..io import check_output_dir
+from ..io import check_output_dir, check_output_file
 from ..oracle.compare import compare_files
+from ..oracle.junit import report_case, write_junit
 from ..oracle.metrics import FLIP_MISSING
 
 HELP = "compare two images (exit 0 pass, 1 fail, 2 bad input)"
@@ -40,6 +41,7 @@ def parser() -> argparse.ArgumentParser:
                    "1/99th percentile of the reference)")
     p.add_argument("--no-flip", action="store_true", help="skip HDR-FLIP (default: computed when flip-evaluator "
                    "is installed)")
+    p.add_argument("--junit", metavar="FILE", help="also write the verdict as JUnit XML, one test case (default: none)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing, use the exit code (default: off)")
     p.add_argument("--allow-8bit", action="store_true", help="accept 8-bit PNG/JPEG inputs, compared as their "
                    "0-1 values (default: refused; a .png of vlref is a tone-mapped preview, not radiance)")
@@ -72,6 +74,8 @@ def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
     if args.output:
         check_output_dir(args.output)
+    if args.junit:
+        check_output_file(args.junit, "--junit")
     _refuse_8bit(args)
     if args.border < 0:
         raise InputError(CLI, "--border", f"must be an integer >= 0, got {args.border}")
@@ -79,6 +83,10 @@ def run(args) -> int:
                            ignore_sky=args.ignore_sky, sky_depth=args.sky_depth, border=args.border,
                            mask=args.mask, key=args.key, out_dir=args.output, exposure=args.exposure,
                            flip=not args.no_flip)
+    if args.junit:
+        html = Path(args.output) / "report.html" if args.output else None
+        write_junit(args.junit, "vlref compare", [report_case(f"{Path(args.test).name} vs {Path(args.ref).name}",
+                                                              report, html)])
     if not args.quiet and report.flip.note == FLIP_MISSING:
         print(f"vlref compare: note: HDR-FLIP skipped, {FLIP_MISSING}; no flip.png written", file=sys.stderr)
     if not args.quiet:

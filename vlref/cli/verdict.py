@@ -7,7 +7,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..io import check_output_dir
+from ..io import check_output_dir, check_output_file
+from ..oracle.junit import Case, write_junit
 from ..oracle.verdict import judge
 
 HELP = "judge a port on its own buffers and against the scene (exit 0 pass, 1 fail, 2 bad input)"
@@ -24,6 +25,8 @@ def parser() -> argparse.ArgumentParser:
                    "sets no `preset` (default gpu-half)")
     p.add_argument("--set", action="append", metavar="KEY.PATH=VALUE",
                    help="override a scene field (repeatable; default: none)")
+    p.add_argument("--junit", metavar="FILE", help="also write JUnit XML, one test case per comparison (default: "
+                   "none)")
     p.add_argument("-q", "--quiet", action="store_true", help="print nothing, use the exit code (default: off)")
     return p
 
@@ -32,7 +35,12 @@ def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
     if args.output:
         check_output_dir(args.output)
+    if args.junit:
+        check_output_file(args.junit, "--junit")
     verdict = judge(args.manifest, args.output, args.preset, args.set or ())
+    if args.junit:
+        write_junit(args.junit, "vlref verdict", [Case(f"{p.group}: {p.name}", p.passed, p.metrics, p.report, p.reason)
+                                                  for p in verdict.passes])
     if not args.quiet:
         print(verdict.table())
         if args.output:

@@ -5,6 +5,7 @@
 * :mod:`.compare`  masks, :func:`compare_arrays`, :func:`compare_files` (``vlref compare``: :mod:`vlref.cli.compare`)
 * :mod:`.report`   report.json, diff.exr, heatmap.png, flip.png and the self-contained report.html
 * :mod:`.golden`   the golden suite: build, verify, list (``vlref golden``: :mod:`vlref.cli.golden`)
+* :mod:`.junit`    JUnit XML of any list of outcomes (``--junit`` of compare, golden verify, verdict)
 """
 
 from .compare import Report, compare_arrays, compare_files
