@@ -244,11 +244,11 @@ def _explorer_image(page) -> np.ndarray:
     from PIL import Image
 
     page.wait_for_function(f"(() => {{ const all = document.querySelectorAll({IMAGE!r}); const e = all[all.length - 1];"
-                           f" return e && e.complete && e.naturalWidth > 0; }})()", timeout=30_000)
+                           f" return e && e.complete && e.naturalWidth > 0; }})()", timeout=90_000)
     image = page.locator(IMAGE).last
     image.evaluate("e => e.decode()")
     image.scroll_into_view_if_needed()
-    deadline = time.monotonic() + 15
+    deadline = time.monotonic() + 30
     while True:   # a fresh image is painted a frame or two after it decodes
         shot = page.screenshot(clip=image.bounding_box())   # what the window shows (an element screenshot of an
         rgb = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"), dtype=float)   # output scrolled off is blank)
@@ -267,8 +267,8 @@ def test_explorer_slider_rerenders(browser, jupyter):
     start = time.monotonic()
     page = browser.new_page(viewport={"width": 1280, "height": 1500})
     page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
-    page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=60_000)
-    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=60_000)
+    page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=120_000)
     for _ in range(3):   # a "Run All" sent while the kernel is still connecting is lost: send it again
         page.get_by_role("menuitem", name="Run", exact=True).click()
         page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
@@ -290,7 +290,7 @@ def test_explorer_slider_rerenders(browser, jupyter):
     page.keyboard.type("0.3")
     page.keyboard.press("Enter")
     page.wait_for_function("document.querySelector('.jp-Notebook').innerText.includes('render #2:')",
-                           timeout=60_000)
+                           timeout=120_000)
     assert _render_count(page) == 2
     assert readout.inner_text().startswith("0.30")
     after = _explorer_image(page)
