@@ -48,21 +48,38 @@ POST_PASSES = ("downsample", "volumes", "upsample", "blur_h", "blur_v", "composi
 RES_FACTOR = {"full": 1, "half": 2, "quarter": 4}
 
 
+BACKENDS = ("Vulkan", "Metal", "D3D12")
+"""wgpu backends the port runs on. Not OpenGL: wgpu's GLSL back end cannot ``textureLoad`` a depth texture
+(pipeline creation fails: "textureLoad from depth textures is not supported in GLSL"), and the port reads
+its depth and shadow textures that way."""
+
+
 class NoAdapter(RuntimeError):
-    """No WebGPU adapter (e.g. no Vulkan driver): the port cannot run here."""
+    """No WebGPU adapter on a backend of :data:`BACKENDS` (e.g. no Vulkan driver): the port cannot run here."""
+
+
+def pick_adapter(adapters):
+    """The first adapter on a supported backend (:data:`BACKENDS`); :class:`NoAdapter` saying what exists."""
+    for adapter in adapters:
+        if adapter.info.get("backend_type") in BACKENDS:
+            return adapter
+    found = ", ".join(f"{a.info.get('device')} ({a.info.get('backend_type')})" for a in adapters) or "none"
+    raise NoAdapter(f"no WebGPU adapter on {'/'.join(BACKENDS)} (found: {found}); the port needs the Vulkan "
+                    "backend (install a Vulkan driver, e.g. Mesa's lavapipe: mesa-vulkan-drivers): wgpu's OpenGL "
+                    "backend cannot textureLoad depth textures")
 
 
 def device():
-    """A wgpu device on the first adapter, with ``float32-blendable`` when the adapter has it."""
+    """A wgpu device on the first Vulkan/Metal/D3D12 adapter (:func:`pick_adapter`), with
+    ``float32-blendable`` when the adapter has it."""
     os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="xdg-"))
     import wgpu
 
     try:
-        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+        adapters = wgpu.gpu.enumerate_adapters_sync()
     except Exception as exc:  # wgpu raises RuntimeError-like errors when no backend exists
         raise NoAdapter(f"no WebGPU adapter: {exc}") from exc
-    if adapter is None:
-        raise NoAdapter("no WebGPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers)")
+    adapter = pick_adapter(sorted(adapters, key=lambda a: a.info.get("adapter_type") != "DiscreteGPU"))
     features = [f for f in ("float32-blendable",) if f in adapter.features]
     return adapter, adapter.request_device_sync(required_features=features)
 
@@ -80,15 +97,18 @@ def _constants(source: str, overrides: dict) -> dict:
 
 
 class KillzonePort:
-    """One scene on one device: raster passes at construction, post passes per variant (:meth:`run`)."""
+    """One scene on one device: raster passes at construction (with ``raster_variant``'s switches when that
+    variant is a raster one, :mod:`kz_variants`), post passes per variant (:meth:`run`)."""
 
-    def __init__(self, scene, dev=None):
+    def __init__(self, scene, dev=None, raster_variant: str = "faithful"):
         import wgpu
 
         self.wgpu = wgpu
         self.adapter, self.device = dev if dev is not None else device()
         self.scene = scene
         self._check_scene(scene)
+        spec = VARIANTS[raster_variant]
+        self.raster_overrides = spec.overrides if spec.raster else {}
         self.cam = kz_scene.camera_setup(scene)
         W, H = self.cam.width, self.cam.height
         f = RES_FACTOR[kz_scene.resolved(scene, "resolution")]
@@ -101,11 +121,12 @@ class KillzonePort:
                                                            p.blur_sigma), wgpu.BufferUsage.UNIFORM)
         self.layers, layer = [], 0
         for light in scene.lights:
-            self.layers.append(layer if light.shadows else -1)
-            layer += {"spot": 1, "point": 6}[light.type] if light.shadows else 0
-        self.lights = self._buffer(np.concatenate([kz_scene.light_block(li, la) for li, la in
-                                                   zip(scene.lights, self.layers)]), wgpu.BufferUsage.STORAGE)
-        self.shadow_res = max([li.shadows.resolution for li in scene.lights if li.shadows] + [1])
+            shadowed = light.shadows is not None and light.shadows.enabled
+            self.layers.append(layer if shadowed else -1)
+            layer += {"spot": 1, "point": 6}[light.type] if shadowed else 0
+        self.light_blocks = np.concatenate([kz_scene.light_block(li, la) for li, la in zip(scene.lights, self.layers)])
+        self.lights = self._buffer(self.light_blocks, wgpu.BufferUsage.STORAGE)
+        self.shadow_res = max([li.shadows.resolution for li, la in zip(scene.lights, self.layers) if la >= 0] + [1])
         usage = wgpu.TextureUsage
         rt = usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC
         self.depth = d.create_texture(size=(W, H, 1), format="depth32float", usage=rt)
@@ -119,17 +140,23 @@ class KillzonePort:
 
     @staticmethod
     def _check_scene(scene):
-        """What this port implements: killzone, point/spot lights without cookies, a homogeneous medium."""
+        """What this port implements: killzone, point/spot lights without cookies (every attenuation and cone
+        law, shadow strength, slope bias), a homogeneous medium; raises ValueError listing what it does not."""
         m = scene.medium
         problems = [k for k, bad in (("medium.height_fog", m.height_fog), ("medium.noise", m.noise),
                                      ("medium.bounds", m.bounds)) if bad is not None]
+        for i, obj in enumerate(scene.objects):
+            if obj.material.opacity < 1.0:
+                problems.append(f"objects.{i}.material.opacity (transparent occluders)")
+            if any(obj.material.emission):
+                problems.append(f"objects.{i}.material.emission")
         for i, li in enumerate(scene.lights):
             if li.type == "directional":
                 problems.append(f"lights.{i}.type (directional)")
             if li.cookie is not None:
                 problems.append(f"lights.{i}.cookie")
-            if li.shadows is not None and (li.shadows.filter != "hard" and scene.techniques.killzone.shadow_filter != "hard"):
-                problems.append(f"lights.{i}.shadows.filter")
+            if li.shadows is not None and li.shadows.enabled and scene.techniques.killzone.shadow_filter != "hard":
+                problems.append("techniques.killzone.shadow_filter (the port looks up one texel: hard)")
         p = scene.techniques.killzone
         if scene.render.technique != "killzone":
             problems.append("render.technique (the port is killzone)")
@@ -201,8 +228,9 @@ class KillzonePort:
             {"format": "float32x3", "offset": 12, "shader_location": 1},
             {"format": "float32x3", "offset": 24, "shader_location": 2}]}
         ztest = {"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"}
-        gb = self._pipeline("gbuffer", "vs_main", "fs_main", ["rgba16float", "rgba16float"], vertex_buffers=[layout],
-                            depth=ztest)
+        ov = self.raster_overrides
+        gb = self._pipeline("gbuffer", "vs_main", "fs_main", ["rgba16float", "rgba16float"], ov,
+                            vertex_buffers=[layout], depth=ztest)
         gb_bind = self._bind(gb, 0, [self._ubuf(self.globals)])
 
         def gbuffer(enc):
@@ -219,10 +247,11 @@ class KillzonePort:
 
         self._timed("gbuffer", gbuffer)
 
-        sp = self._pipeline("shadow", "vs_main", "fs_main", [], vertex_buffers=[layout], depth=ztest)
+        sp = self._pipeline("shadow", "vs_main", "fs_main", [], ov, vertex_buffers=[layout], depth=ztest)
+        shadow_clear = 1.0 if ov.get("HOST_SHADOW_CLEAR_NEAR") else 0.0
         sp_binds, self.tiles = [], []
         for i, light in enumerate(self.scene.lights):
-            if not light.shadows:
+            if self.layers[i] < 0:
                 continue
             for k, (face, view, proj) in enumerate(kz_scene.shadow_tiles(light)):
                 sh = light.shadows
@@ -236,7 +265,8 @@ class KillzonePort:
             for layer, res, bind in sp_binds:
                 view = self.shadow.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
                 rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": 0.0, "depth_load_op": "clear", "depth_store_op": "store"})
+                    "view": view, "depth_clear_value": shadow_clear, "depth_load_op": "clear",
+                    "depth_store_op": "store"})
                 rp.set_pipeline(sp)
                 rp.set_bind_group(0, bind)
                 rp.set_viewport(0, 0, res, res, 0, 1)
@@ -246,7 +276,7 @@ class KillzonePort:
 
         self._timed("shadow", shadows)
 
-        lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"])
+        lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"], ov)
         lp_bind = self._bind(lp, 0, [self._ubuf(self.globals), self._ubuf(self.lights),
                                      self.shadow.create_view(dimension="2d-array"), self.depth.create_view(),
                                      self.normal.create_view(), self.albedo.create_view()])
@@ -258,7 +288,7 @@ class KillzonePort:
         """Run passes 4-9 with ``variant``'s switches; returns every pass's output (float32, row 0 on top)."""
         wgpu, d = self.wgpu, self.device
         spec = VARIANTS[variant]
-        ov = spec.overrides
+        ov = {} if spec.raster else spec.overrides
         fmt = spec.light_format
         W, H = self.cam.width, self.cam.height
         w, h = self.low
@@ -278,10 +308,17 @@ class KillzonePort:
         mp = self._pipeline("march", "vs_volume", "fs_march", [fmt], ov, cull="front", blend=add, vertex_buffers=[
             {"array_stride": 12, "step_mode": "vertex",
              "attributes": [{"format": "float32x3", "offset": 0, "shader_location": 0}]}])
-        mp_bind = self._bind(mp, 0, [g, self._ubuf(self.lights), self.shadow.create_view(dimension="2d-array"),
+        lights = self.lights
+        if ov.get("HOST_LIGHT_COLOUR_FP16"):   # row 2 of each Light: colour * intensity, shadow strength
+            blocks = self.light_blocks.reshape(-1, 8, 4).copy()
+            blocks[:, 2, :3] = np.clip(blocks[:, 2, :3], -65504.0, 65504.0).astype(np.float16)
+            lights = self._buffer(blocks.reshape(-1), wgpu.BufferUsage.STORAGE)
+        mp_bind = self._bind(mp, 0, [g, self._ubuf(lights), self.shadow.create_view(dimension="2d-array"),
                                      tex["depth_lo"].create_view()])
         volumes = []
         for i, light in enumerate(self.scene.lights):
+            if ov.get("HOST_CULL_BEHIND_CAMERA") and (np.asarray(light.position) - self.cam.eye) @ self.cam.frame[:, 2] < 0:
+                continue
             mesh = kz_scene.volume_mesh(light)
             idx = self._buffer(np.array([i, 0, 0, 0], dtype=np.uint32).view(np.float32), wgpu.BufferUsage.UNIFORM)
             volumes.append((self._buffer(mesh, wgpu.BufferUsage.VERTEX), len(mesh), self._bind(mp, 1, [self._ubuf(idx)])))
