@@ -160,10 +160,15 @@ class KillzonePort:
         p = scene.techniques.killzone
         if scene.render.technique != "killzone":
             problems.append("render.technique (the port is killzone)")
-        if p.light_resolutions or kz_scene.resolved(scene, "sampling") != "bayer4" or not p.transmittance \
-                or not p.blur or p.blur_radius != 3 or p.blur_depth_weight != "inverse":
-            problems.append("techniques.killzone (the port implements the defaults: bayer4, one resolution, "
-                            "transmittance, 7-tap inverse-depth blur)")
+        for name, want in (("sampling", "bayer4"), ("resolution", "half")):
+            if kz_scene.resolved(scene, name) != want:
+                problems.append(f"render.{name} = {kz_scene.resolved(scene, name)!r} (the port has {want!r} only)")
+        for name, bad in (("light_resolutions", bool(p.light_resolutions)), ("transmittance", not p.transmittance),
+                          ("blur", not p.blur), ("blur_radius", p.blur_radius != 3),
+                          ("blur_depth_weight", p.blur_depth_weight != "inverse")):
+            if bad:
+                problems.append(f"techniques.killzone.{name} = {getattr(p, name)!r} (the port implements the "
+                                "default: one resolution, view transmittance, a 7-tap inverse-depth blur)")
         if problems:
             raise ValueError("the wgpu port does not implement: " + ", ".join(problems))
 

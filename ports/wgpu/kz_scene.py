@@ -213,7 +213,9 @@ def volume_mesh(light) -> np.ndarray:
     Spot: a 24-sided cone, apex at the light, length ``range`` along the axis, its polygon
     circumscribing the circle of radius ``range · tan(θ)``: it contains ball ∩ cone. Point: an
     icosphere (2 subdivisions) scaled so that every face plane lies at least ``range`` from the centre.
-    The shader intersects the ray with the exact volume; the mesh only selects the pixels.
+    The shader intersects the ray with the exact volume; the mesh only selects the pixels. Both meshes are
+    wound alike (clockwise seen from outside, in world coordinates): the march pass culls front faces and
+    draws the far side, which a camera inside the volume sees too (data/conformance/inside_volume.toml).
     """
     pos = np.asarray(light.position, dtype=np.float64)
     if light.type == "spot":
@@ -239,6 +241,7 @@ def volume_mesh(light) -> np.ndarray:
         tri = np.concatenate([np.stack(s, axis=1) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     plane = np.abs(np.einsum("ij,ij->i", n / np.linalg.norm(n, axis=1, keepdims=True), tri[:, 0]))
+    tri = tri[:, ::-1]   # wound as the cone: inward-facing in a right-handed sense, so "back faces" are the far side
     return (tri.reshape(-1, 3) * (light.range / plane.min()) + pos).astype(np.float32)
 
 

@@ -60,7 +60,7 @@ VARIANTS = {
                              {"BUG_SHADOW_PLANAR": 1}),
     "blur_gauss_no_two": Variant("blur: Gaussian exp(-k^2/sigma^2), the 2 of 2 sigma^2 missing", "fail",
                                  {"BUG_GAUSS_NO_TWO": 1}),
-    "blur_eps_x10": Variant("blur: bilateral guard 10 eps (depth weights 10x too loose)", "fail",
+    "blur_eps_x10": Variant("upsample and blur: bilateral guard 10 eps (depth weights 10x too loose)", "fail",
                             {"BUG_BLUR_EPS_X10": 1}),
     "block_end_floor": Variant("downsample: block end rounded down (odd sizes lose a row and a column)", "fail",
                                {"BUG_BLOCK_END_FLOOR": 1}, scene="laws"),

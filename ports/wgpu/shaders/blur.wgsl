@@ -7,7 +7,7 @@
 override AXIS: u32 = 0u;                     // 0 horizontal, 1 vertical
 override BENIGN_REVERSED_SUM: bool = false;  // taps summed -3..3 in order
 override BUG_GAUSS_NO_TWO: bool = false;     // Gaussian exp(-k^2 / sigma^2): the factor 2 of 2 sigma^2 missing
-override BUG_BLUR_EPS_X10: bool = false;     // depth weight 1 / (|dz| + 10 eps): a bilateral guard 10x too loose
+override BUG_BLUR_EPS_X10: bool = false;     // depth weight 1 / (|dz| + 10 eps): the bilateral guard 10x too loose
 
 const TAP_ORDER = array<i32, 7>(0, -3, -2, -1, 1, 2, 3);
 
