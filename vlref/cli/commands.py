@@ -34,6 +34,7 @@ COMMANDS = {
     "golden": ("golden", "vlref golden"),
     "march": ("march", "vlref march"),
     "march export": ("march_export", "vlref march export"),
+    "verdict": ("verdict", "vlref verdict"),
     "bench": ("bench", "vlref bench"),
     "warmup": ("warmup", "vlref"),
 }

@@ -24,6 +24,9 @@ def parser() -> argparse.ArgumentParser:
                    help="row 0 of the exported images: top or bottom (default top)")
     p.add_argument("--camera-forward", default="+z", choices=["+z", "-z"],
                    help="view-space axis the camera looks along (default +z)")
+    p.add_argument("--passes", action="store_true", help="also write vlref's pass outputs and final frame as a "
+                   "port's, declared in port.toml ([[passes]], final): vlref as a port of itself, for vlref verdict "
+                   "(default: off)")
     return p
 
 
@@ -37,6 +40,6 @@ def run(args) -> int:
     path = export_port(args.scene, args.output, args.set, depth_encoding=depth_enc,
                        depth_convention=depth_conv or "d3d", uv_origin=args.uv_origin,
                        shadow_encoding=shadow_enc, shadow_convention=shadow_conv or "d3d",
-                       camera_forward=args.camera_forward)
+                       camera_forward=args.camera_forward, passes=args.passes)
     print(f"wrote {path}", file=sys.stderr)
     return 0

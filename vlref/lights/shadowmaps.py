@@ -57,7 +57,7 @@ from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_H
                    KIND_DIRECTIONAL, KIND_POINT, KIND_SPOT, PackedLights)
 
 __all__ = ["ShadowMaps", "ShadowTable", "LightMaps", "build_shadow_maps", "pack_shadow_maps", "apply_strength",
-           "shadow_visibility", "map_lit", "spot_map_coords", "sample_map",
+           "shadow_visibility", "map_lit", "lit_at_points", "cast_rays", "spot_map_coords", "sample_map",
            "pcf_taps", "pcf_blend", "cascade_splits", "CUBE_FACES", "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
@@ -229,6 +229,19 @@ def _cast_map(geo, origins, dirs, start, tmax, bias, slope_bias, want_tint, out,
                 tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[k] + tt + bias, r, g, b
 
 
+def cast_rays(geometry, origins: np.ndarray, dirs: np.ndarray, start: np.ndarray, tmax: np.ndarray, bias: float,
+              slope_bias: float) -> np.ndarray:
+    """(N,) the biased distance ``start + t + bias + slope_bias · min(tan α, 10)`` of each ray's first opaque
+    hit in ``(0, tmax)`` (``inf`` where none): what a map texel with these rays stores (module docstring),
+    for rays a caller chooses (a port's texel rays, :mod:`vlref.oracle.verdict`)."""
+    out = np.empty(len(origins))
+    _cast_map(geometry.arrays, np.ascontiguousarray(origins, dtype=np.float64),
+              np.ascontiguousarray(dirs, dtype=np.float64), np.ascontiguousarray(start, dtype=np.float64),
+              np.ascontiguousarray(tmax, dtype=np.float64), float(bias), float(slope_bias), False, out,
+              np.empty((0, 4)))
+    return out
+
+
 def texel_grid(res: int) -> tuple[np.ndarray, np.ndarray]:
     """NDC ``(x, y)`` of the texel centres of a ``res``² map, flattened row-major, row 0 at the top (y = +1)."""
     x = (np.arange(res) + 0.5) / res * 2.0 - 1.0
@@ -388,6 +401,14 @@ def spot_map_coords(wx, wy, wz, rx, ry, rz, ux, uy, uz, dx, dy, dz, tan_half):
     ahead = zl > 0.0
     k = 0.5 / (zl * tan_half) if ahead else 0.0
     return 0.5 + xl * k, 0.5 - yl * k, d_ref, ahead
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def lit_at_points(shadows, kind, lf, light, points, out):
+    """``out[i]``: the mean over RGB of :func:`map_lit` of light ``light`` at world point ``points[i]`` (N, 3)."""
+    for i in prange(points.shape[0]):
+        r, g, b = map_lit(shadows, kind, lf, light, points[i, 0], points[i, 1], points[i, 2])
+        out[i] = (r + g + b) / 3.0
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

@@ -30,13 +30,15 @@ from .metrics import FlipResult, error_metrics, failing_pixels, hdr_flip
 from .presets import Tolerance, tolerance
 
 __all__ = [
-    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files",
+    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files", "margin",
 ]
 
 RULE = ("pixel fails when |test-ref| > abs_tol*S + rel_tol*|ref| in any channel; image passes when "
         "failing fraction <= max_fail_fraction and mean |test-ref| <= max_mean_abs*S "
         "(and mean HDR-FLIP <= max_flip_mean when set and available); S = 1 (scale 'absolute') or "
-        "mean |ref| over the compared values (scale 'mean'); values at a bound pass")
+        "mean |ref| over the compared values (scale 'mean'); values at a bound pass; in an edge zone (pixels "
+        "near depth discontinuities and shadow silhouettes) a pixel fails beyond edge_abs_tol*S + "
+        "edge_rel_tol*|ref| and the mean error is taken outside the zone")
 
 
 @dataclass
@@ -84,6 +86,11 @@ class Report:
             "vlref_version": __version__,
         }
 
+    def margins(self) -> dict[str, float]:
+        """Each evaluated check's value / bound (1 = at the bound): 0 for a zero value, ``inf`` for a nonzero
+        value over a zero bound; no division by a zero bound."""
+        return {c.name: margin(c.value, c.bound) for c in self.checks if c.value is not None}
+
     def summary(self) -> str:
         """A few lines for the terminal."""
         m = self.metrics
@@ -99,6 +106,13 @@ class Report:
         return "\n".join(lines)
 
 
+def margin(value: float, bound: float) -> float:
+    """``value / bound`` for ``bound > 0``; for a zero bound 0 when ``value`` is 0, else ``inf``."""
+    if bound > 0:
+        return float(value) / float(bound)
+    return 0.0 if value == 0 else math.inf
+
+
 def _as_image(a) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     return a[:, :, None] if a.ndim == 2 else a
@@ -110,10 +124,13 @@ def _first_bad(bad: np.ndarray) -> str:
 
 
 def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = None, *, flip: bool = True,
-                   names: tuple[str, str] = ("<reference>", "<test>"), inputs: Mapping | None = None) -> Report:
+                   names: tuple[str, str] = ("<reference>", "<test>"), inputs: Mapping | None = None,
+                   edges: np.ndarray | None = None) -> Report:
     """Compare two ``(H, W)`` / ``(H, W, C)`` arrays under ``tol`` (a :class:`Tolerance` or preset name).
 
-    ``mask`` (``(H, W)`` bool, true = compared) defaults to every pixel. ``names`` label the arrays in
+    ``mask`` (``(H, W)`` bool, true = compared) defaults to every pixel. ``edges`` (``(H, W)`` bool, the
+    edge zone of :mod:`vlref.oracle.edges`, already ``tol.edge_pixels`` wide) gets the edge tolerance
+    (``tol.edge_rel``, ``tol.edge_abs``); the mean-error check then covers the compared pixels outside it. ``names`` label the arrays in
     error messages. Raises :class:`InputError` when shapes or channel counts differ, a value is NaN,
     a compared value is infinite, or the mask selects no pixel; :class:`ValueError` when ``mask`` is not
     ``(H, W)``.
@@ -131,6 +148,9 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
     mask = np.ones(r.shape[:2], bool) if mask is None else np.asarray(mask, dtype=bool)
     if mask.shape != r.shape[:2]:
         raise ValueError(f"mask shape {mask.shape} differs from the images' {r.shape[:2]}")
+    zone = np.zeros(r.shape[:2], bool) if edges is None else np.asarray(edges, dtype=bool)
+    if zone.shape != r.shape[:2]:
+        raise ValueError(f"edges shape {zone.shape} differs from the images' {r.shape[:2]}")
     for a, name in ((r, names[0]), (t, names[1])):
         if np.isnan(a).any():
             raise InputError(name, "values", f"NaN present ({_first_bad(np.isnan(a).any(axis=2))})")
@@ -146,14 +166,25 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
     abs_thr, mean_bound = tol.abs_tol * s, tol.max_mean_abs * s
     metrics = error_metrics(r, t, mask, abs_thr, tol.rel_tol)
     metrics["total_pixels"] = int(mask.size)
-    rf = np.where(mask[:, :, None], r, 0.0)
-    fail = failing_pixels(rf, np.where(mask[:, :, None], t, 0.0), abs_thr, tol.rel_tol) & mask
+    rf, tf = np.where(mask[:, :, None], r, 0.0), np.where(mask[:, :, None], t, 0.0)
+    fail = failing_pixels(rf, tf, abs_thr, tol.rel_tol) & mask
+    zone &= mask
+    metrics["edge_pixels"] = int(np.count_nonzero(zone))
+    if zone.any():
+        fail = np.where(zone, failing_pixels(rf, tf, tol.edge_abs * s, tol.edge_rel), fail) & mask
+        metrics["failing_pixels"] = int(np.count_nonzero(fail))
+        metrics["frac_failing"] = metrics["failing_pixels"] / n
+        outside = mask & ~zone
+        metrics["mean_abs_outside_edges"] = float(np.mean(np.abs(t[outside] - r[outside]))) if outside.any() else 0.0
+    metrics.setdefault("mean_abs_outside_edges", metrics["mean_abs"])
+    metrics["failing_pixels_edge"] = int(np.count_nonzero(fail & zone))
     fr = hdr_flip(r, t, mask) if flip else FlipResult(None, None, "not computed")
     metrics["flip_mean"] = fr.mean
 
     checks = [Check("failing_fraction", metrics["frac_failing"], tol.max_fail_fraction,
                     metrics["frac_failing"] <= tol.max_fail_fraction),
-              Check("mean_abs_error", metrics["mean_abs"], mean_bound, metrics["mean_abs"] <= mean_bound)]
+              Check("mean_abs_error", metrics["mean_abs_outside_edges"], mean_bound,
+                    metrics["mean_abs_outside_edges"] <= mean_bound)]
     if tol.max_flip_mean is not None:
         if fr.available:
             checks.append(Check("flip_mean", fr.mean, tol.max_flip_mean, fr.mean <= tol.max_flip_mean))
@@ -161,6 +192,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
             checks.append(Check("flip_mean", None, tol.max_flip_mean, None, f"FLIP unavailable: {fr.note}"))
     passed = all(c.passed is not False for c in checks)
     thresholds = {"scale": tol.scale, "S": s, "abs_threshold": abs_thr, "rel_tol": tol.rel_tol,
+                  "edge_pixels": tol.edge_pixels, "edge_abs_threshold": tol.edge_abs * s, "edge_rel_tol": tol.edge_rel,
                   "max_fail_fraction": tol.max_fail_fraction, "mean_abs_bound": mean_bound,
                   "max_flip_mean": tol.max_flip_mean}
     info = {"reference": names[0], "test": names[1], **(inputs or {})}

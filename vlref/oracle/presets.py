@@ -8,6 +8,12 @@ knobs), evaluated over the compared pixels:
   ``<= max_mean_abs * S`` (and, when ``max_flip_mean`` is set and FLIP is available, the mean
   HDR-FLIP ``<= max_flip_mean``).
 
+Edge zone (:mod:`vlref.oracle.edges`): when the caller gives one (``compare_arrays(edges=)``, built
+``edge_pixels`` pixels wide around depth discontinuities and shadow silhouettes), its pixels fail only
+beyond ``edge_abs_tol * S + edge_rel_tol * |r_c|`` (default: the base knobs) and the mean absolute error
+is taken outside it; the presets for GPU ports allow no failing pixel (``max_fail_fraction = 0``), so
+what a rasteriser may change is absorbed by geometry, not by a share of the image that grows with it.
+
 ``S`` is the scale: ``"absolute"`` -> 1, ``"mean"`` -> the mean ``|ref|`` over the compared values
 (so an all-zero reference under ``"mean"`` demands an exact match).
 The data file documents the reasoning behind each preset's numbers.
@@ -45,21 +51,39 @@ class Tolerance:
     scale: str = "absolute"
     name: str = "custom"
     description: str = ""
+    edge_pixels: int = 0
+    edge_rel_tol: float | None = None
+    edge_abs_tol: float | None = None
+
+    @property
+    def edge_rel(self) -> float:
+        """The relative tolerance inside the edge zone (``edge_rel_tol``, default ``rel_tol``)."""
+        return self.rel_tol if self.edge_rel_tol is None else self.edge_rel_tol
+
+    @property
+    def edge_abs(self) -> float:
+        """The absolute tolerance (times S) inside the edge zone (``edge_abs_tol``, default ``abs_tol``)."""
+        return self.abs_tol if self.edge_abs_tol is None else self.edge_abs_tol
 
     def __post_init__(self):
-        for key in ("abs_tol", "rel_tol", "max_fail_fraction", "max_mean_abs", "max_flip_mean"):
+        for key in ("abs_tol", "rel_tol", "max_fail_fraction", "max_mean_abs", "max_flip_mean", "edge_rel_tol",
+                    "edge_abs_tol"):
             value = getattr(self, key)
-            if value is None and key == "max_flip_mean":
+            if value is None and key in _OPTIONAL:
                 continue
             if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
                     or value < 0:
                 raise InputError(_SOURCE, key, f"must be a finite number >= 0, got {value!r}")
+        if not isinstance(self.edge_pixels, int) or isinstance(self.edge_pixels, bool) or self.edge_pixels < 0:
+            raise InputError(_SOURCE, "edge_pixels", f"must be an integer >= 0, got {self.edge_pixels!r}")
         if self.max_fail_fraction > 1:
             raise InputError(_SOURCE, "max_fail_fraction", f"is a fraction in [0, 1], got {self.max_fail_fraction}")
         if self.scale not in SCALES:
             raise InputError(_SOURCE, "scale", f"must be one of {', '.join(SCALES)}, got {self.scale!r}")
 
 
+_OPTIONAL = ("max_flip_mean", "edge_rel_tol", "edge_abs_tol")
+"""Knobs that may be unset (``none``): no FLIP gate; the edge zone's tolerance = the base one."""
 _KNOBS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.name != "name")
 
 
@@ -74,8 +98,14 @@ def _coerce(key: str, value) -> object:
         raise InputError(_SOURCE, key, "unknown tolerance key" + _suggest(key, _KNOBS))
     if key in ("scale", "description"):
         return str(value)
-    if key == "max_flip_mean" and (value is None or str(value).strip().lower() in ("none", "off", "")):
+    if key in _OPTIONAL and (value is None or str(value).strip().lower() in ("none", "off", "")):
         return None
+    if key == "edge_pixels":
+        try:
+            return int(value) if isinstance(value, str) or (isinstance(value, float) and value.is_integer()) \
+                else value
+        except ValueError:
+            raise InputError(_SOURCE, key, f"not an integer: {value!r}") from None
     if isinstance(value, str):
         try:
             return float(value)

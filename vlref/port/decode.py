@@ -13,7 +13,7 @@ from ..errors import InputError
 from ..lights.shadowmaps import texel_grid
 
 __all__ = ["NEAR_VALUE", "FAR_VALUE", "CUBE_ORDER", "SHADOW_CONVENTIONS", "PortTile", "PortShadowMap",
-           "decode_depth", "flip_z", "camera_from_matrices", "tile_points", "nearest_texel"]
+           "decode_depth", "flip_z", "camera_from_matrices", "tile_rays", "tile_points", "nearest_texel"]
 
 NEAR_VALUE = {"d3d": 0.0, "gl": -1.0, "reversed": 1.0}
 """Device depth (NDC z) of the near plane per convention."""
@@ -99,7 +99,7 @@ def camera_from_matrices(view, projection, width: int, height: int, convention: 
     return Camera(-rot @ v[:3, 3], rot, math.degrees(2.0 * math.atan(1.0 / p[1, 1])), width, height, near, far)
 
 
-def _ray_points(tile: PortTile, res: int):
+def tile_rays(tile: PortTile, res: int):
     """View-space texel-centre rays of a tile: origins (n, 3) on the plane z = 0 (orthographic) or at the
     eye (perspective), and unit directions (n, 3) pointing into the map's volume (whose points at NDC
     z = 0.25, inside the clip range of every convention, must lie in front of the view origin)."""
@@ -131,7 +131,7 @@ def tile_points(tile: PortTile, encoding: str, convention: str) -> np.ndarray:
         world = h[:, :3] / h[:, 3:4]
     else:
         empty = ~np.isfinite(val)
-        origin, d = _ray_points(tile, res)
+        origin, d = tile_rays(tile, res)
         v = np.where(empty, 1.0, val)
         if encoding == "depth":  # linear view depth: the ray point with |z| = value
             s = (np.sign(d[:, 2]) * v - origin[:, 2]) / d[:, 2]

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..camera import Camera, linear_to_raw, look_rotation
 from ..lights.shadowmaps import CUBE_FACES, SHADOW_EXACT, SHADOW_NONE, cascade_splits, texel_grid
+from ..techniques import TECHNIQUES
 from .decode import FAR_VALUE, NEAR_VALUE, flip_z
 from .manifest import bundled_name
 
@@ -102,12 +103,15 @@ def _toml_value(v) -> str:
 
 def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_encoding: str = "raw", depth_convention: str = "reversed",
                 uv_origin: str = "top", shadow_encoding: str = "depth", shadow_convention: str = "reversed",
-                camera_forward: str = "+z", camera_matrices: bool = True) -> Path:
+                camera_forward: str = "+z", camera_matrices: bool = True, passes: bool = False) -> Path:
     """Export vlref's own depth buffer, scene colour and shadow maps of a scene (a file or bundled name, with
     ``--set`` ``overrides``) in the given encodings, as a port would, and write ``port.toml`` referring to
     the scene (absolute path or bundled name, with ``set = overrides``); returns the manifest's path.
 
-    Maps go one file per light (cube faces in a 3x2 atlas, cascades in an Nx1 atlas).
+    Maps go one file per light (cube faces in a 3x2 atlas, cascades in an Nx1 atlas). ``passes``: also
+    vlref's own pass outputs, as a port's (``final = "final.exr"`` and one ``[[passes]]`` entry per float image
+    buffer of the technique, ``port_<buffer>.npy`` float32, preset ``float32``): vlref as a port of itself,
+    for ``vlref verdict``.
     """
     from ..io import output_dir, write_exr, write_text
     from ..render import prepare_frame
@@ -130,9 +134,21 @@ def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_enco
         lines += ["[camera]", f'forward = "{camera_forward}"', f'convention = "{depth_convention}"',
                   f"view = {_toml_value(f @ cam.view_matrix())}",
                   f"projection = {_toml_value(cam.projection_matrix(depth_convention) @ f)}", ""]
+    stages = TECHNIQUES[scene.render.technique].render(frame.scene, frame) if passes else {}
+    stages = {k: np.asarray(v, dtype=np.float32) for k, v in stages.items()
+              if isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.ndim in (2, 3)}
+    if passes:
+        lines[2:2] = ['final = "final.exr"', 'preset = "float32"']
     lines += ["[depth]", 'path = "depth.exr"', f'encoding = "{depth_encoding}"', f'convention = "{depth_convention}"',
               f"near = {cam.near!r}", f"far = {cam.far!r}", f'uv_origin = "{uv_origin}"', ""]
+    for name, a in stages.items():
+        lines += ["[[passes]]", f'name = "{name}"', f'buffer = "{name}"', f'path = "port_{name}.npy"',
+                  f"ignore_sky = {_toml_value(not bool(np.isfinite(a).all()))}", ""]
     with output_dir(out_dir) as tmp:
+        for name, a in stages.items():
+            np.save(tmp / f"port_{name}.npy", a)
+        if passes:
+            write_exr(tmp / "final.exr", stages["final"])
         write_exr(tmp / "depth.exr", flip(depth))
         write_exr(tmp / "colour.exr", frame.scene_colour)
         for light in range(frame.lights.count):

@@ -21,7 +21,7 @@ from ..scene.fields import F
 from ..scene.schema import build
 from .decode import SHADOW_CONVENTIONS, PortShadowMap, PortTile, camera_from_matrices, decode_depth
 
-__all__ = ["PortManifest", "PortBuffers", "load_port", "bundled_name"]
+__all__ = ["PortManifest", "PortBuffers", "PortPass", "load_port", "bundled_name"]
 
 Matrix4 = tuple[tuple[float, float, float, float], ...]
 UV_ORIGINS = ("top", "bottom")
@@ -104,6 +104,17 @@ class ShadowMapTable:
 
 
 @dataclass(frozen=True)
+class PassTable:
+    """``[[passes]]``: one pass output of the port, judged against ``vlref march --stages`` on its own buffers."""
+
+    name: str = F(doc="the port's name for the pass (reports, JUnit)")
+    buffer: str = F(doc="the vlref --stages buffer it reproduces (march_half, upsample, final, ...)")
+    path: str = F(doc="(h, w) or (h, w, C) image, row 0 on top, relative to the manifest", file=True)
+    preset: Optional[str] = F(None, "tolerance preset (default: the manifest's `preset`, else the verdict's)")
+    ignore_sky: bool = F(False, "compare only where the vlref buffer is finite (e.g. a min-depth buffer)")
+
+
+@dataclass(frozen=True)
 class PortManifest:
     """A port manifest (``port.toml``)."""
 
@@ -114,18 +125,42 @@ class PortManifest:
                               file=True)
     camera: Optional[CameraTable] = F(None, "the port's camera matrices (default: the scene's camera)")
     shadow_maps: tuple[ShadowMapTable, ...] = F((), "one per shadowed light")
+    shadows: bool = F(True, "false: the port renders no shadows (shadowed scene lights are judged unshadowed); "
+                            "true: every light with hard/pcf shadows needs a [[shadow_maps]] entry")
+    final: Optional[str] = F(None, "(H, W, 3) the port's final frame, relative to the manifest", file=True)
+    preset: Optional[str] = F(None, "default tolerance preset of the [[passes]] comparisons")
+    passes: tuple[PassTable, ...] = F((), "the port's pass outputs (vlref verdict)")
 
     def check(self):
         lights = [m.light for m in self.shadow_maps]
         if len(set(lights)) != len(lights):
             return "shadow_maps", "one entry per light"
+        if not self.shadows and self.shadow_maps:
+            return "shadows", "is false (no shadows) but [[shadow_maps]] are exported"
+        names = [p.name for p in self.passes]
+        if len(set(names)) != len(names):
+            return "passes", f"pass names must be unique, got {names}"
         return None
+
+
+@dataclass(frozen=True)
+class PortPass:
+    """A port's pass output (``[[passes]]``): its name, the vlref buffer it reproduces, the image (float64,
+    (h, w, C)), the preset it asks for (None: the default) and whether sky texels are left out."""
+
+    name: str
+    buffer: str
+    image: np.ndarray
+    preset: str | None
+    ignore_sky: bool
+    path: str
 
 
 @dataclass
 class PortBuffers:
     """A decoded port manifest: scene, camera, linear eye depth (inf = sky), scene colour, shadow maps, and
-    ``source``, the manifest's path (error messages name it)."""
+    ``source``, the manifest's path (error messages name it); for the verdict (:mod:`vlref.oracle.verdict`)
+    the port's ``final`` frame (or None), its ``passes``, the default ``preset`` and whether it has shadows."""
 
     scene: object
     camera: Camera
@@ -133,6 +168,10 @@ class PortBuffers:
     colour: np.ndarray
     shadow_maps: tuple[PortShadowMap, ...]
     source: str
+    final: np.ndarray | None = None
+    passes: tuple[PortPass, ...] = ()
+    preset: str | None = None
+    has_shadows: bool = True
 
 
 def _read_single(path) -> np.ndarray:
@@ -207,4 +246,28 @@ def load_port(path, overrides: Sequence[str] = ()) -> PortBuffers:
 
     maps = tuple(PortShadowMap(t.light, _tiles(t, file, f"shadow_maps[{k}]"), t.encoding, t.convention, t.splits)
                  for k, t in enumerate(m.shadow_maps))
-    return PortBuffers(scene, camera, depth, colour, maps, file)
+    if m.shadows:
+        _check_maps(scene, {t.light for t in m.shadow_maps}, file)
+    final = None
+    if m.final is not None:
+        final = read_image(m.final, channels=3, allow_inf=False).astype(np.float64)
+        if final.shape[:2] != (h, w):
+            raise InputError(file, "final", f"is {final.shape[1]}x{final.shape[0]}, the depth {w}x{h}")
+    passes = tuple(PortPass(p.name, p.buffer, read_image(p.path).astype(np.float64), p.preset, p.ignore_sky, p.path)
+                   for p in m.passes)
+    return PortBuffers(scene, camera, depth, colour, maps, file, final, passes, m.preset, m.shadows)
+
+
+def _check_maps(scene, exported: set, file: str) -> None:
+    """:class:`InputError` naming an exported light the scene lacks, or the first light whose scene shadows
+    are hard or pcf but has no exported map."""
+    n = len(scene.lights)
+    for i in sorted(exported):
+        if not 0 <= i < n:
+            raise InputError(file, f"shadow_maps[light={i}]", f"no light {i} (the scene has {n})")
+    for i, light in enumerate(scene.lights):
+        sh = light.shadows
+        if sh is not None and sh.enabled and sh.filter != "exact" and i not in exported:
+            raise InputError(file, "shadow_maps", f"light {i} ({light.type}) has {sh.filter} shadows in the scene but "
+                                                  "no exported map: export its map, or set `shadows = false` if the "
+                                                  "port renders no shadows")

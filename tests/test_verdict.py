@@ -1,0 +1,206 @@
+"""The whole-frame verdict (vlref.oracle.verdict, `vlref verdict`): vlref exported as a port of itself must
+pass on its own buffers AND against the scene; raster bugs planted in its exported buffers must fail the
+against-the-scene comparison that owns them; degenerate inputs fail loudly; the edge zone does not grow
+with the image."""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+import shutil
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from vlref.cli import main
+from vlref.errors import InputError
+from vlref.io import read_image, write_exr
+from vlref.oracle.compare import compare_arrays, margin
+from vlref.oracle.edges import block_any, depth_discontinuities, dilate, edge_zone
+from vlref.oracle.presets import load_presets, tolerance
+from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge
+from vlref.port import load_port
+from vlref.port.export import export_port
+from vlref.render import prepare_frame
+from vlref.scene import load_scene
+
+SCENE = "pillars"
+SMALL = ["render.width=64", "render.height=36", "render.steps=8", "lights.0.shadows.resolution=128"]
+BIAS = 0.03  # lights.0.shadows.bias of data/scenes/pillars.toml
+
+
+@pytest.fixture(scope="module")
+def exported(tmp_path_factory):
+    """vlref's own buffers of the pillars scene as a port would write them, twice: raw reversed-Z depth and
+    shadow maps (the default), and linear depth with distance shadow maps (easy to edit)."""
+    root = tmp_path_factory.mktemp("verdict")
+    raw = export_port(SCENE, root / "raw", SMALL, passes=True)
+    linear = export_port(SCENE, root / "linear", SMALL, passes=True, depth_encoding="linear",
+                         shadow_encoding="distance")
+    return raw.parent, linear.parent
+
+
+def _copy(src, dst):
+    shutil.copytree(src, dst)
+    return dst
+
+
+def _by_name(verdict):
+    return {p.name: p for p in verdict.passes}
+
+
+def test_vlref_as_its_own_port_passes_both_judgments(exported, tmp_path):
+    raw, _ = exported
+    out = tmp_path / "verdict"
+    assert main(["verdict", str(raw / "port.toml"), "-o", str(out), "-q"]) == 0
+    data = json.loads((out / "verdict.json").read_text())
+    assert data["passed"] is True
+    groups = {p["group"] for p in data["passes"]}
+    assert groups == {GROUP_OWN, GROUP_SCENE}
+    names = {p["name"] for p in data["passes"]}
+    assert {"final", "inscatter", "transmittance", "camera", "depth", "shadow_map[light=0]", "shadow_test[light=0]",
+            "scene_colour", "end_to_end"} <= names
+    for p in data["passes"]:
+        if p["name"] != "camera":
+            assert p["metrics"]["failing_pixels"] == 0 and p["metrics"]["compared_pixels"] > 0
+            assert (out / p["report"].split(str(out) + "/")[1]).is_file()
+    assert "PASS" in (out / "index.html").read_text()
+
+
+def _edit_exr(path, change):
+    write_exr(path, change(read_image(path)))
+
+
+def _ray_length(d):
+    """Eye depth -> distance along the pixel ray (the bug: depth decoded as ray length)."""
+    scene = load_scene(SCENE, SMALL)
+    frame = prepare_frame(scene)
+    return frame.camera.eye_depth_to_distance(d[..., 0], frame.camera.ray_directions())[..., None]
+
+
+BUGS = {
+    # name: (which export, file, edit, the against-the-scene comparison that must fail, ones that must pass)
+    "shadow map cleared to the near value under reversed-Z": (
+        0, "shadow_0.exr", lambda a: np.where(a == 0.0, 1.0, a), "shadow_map[light=0]", ("depth", "scene_colour")),
+    "depth decoded as ray length": (1, "depth.exr", _ray_length, "depth", ("shadow_map[light=0]", "scene_colour")),
+    "scene colour without 1/pi": (1, "colour.exr", lambda a: a * math.pi, "scene_colour",
+                                  ("depth", "shadow_map[light=0]", "shadow_test[light=0]")),
+    "shadow bias of the wrong sign": (1, "shadow_0.exr", lambda a: np.where(np.isfinite(a), a - 2 * BIAS, a),
+                                      "shadow_map[light=0]", ("depth", "end_to_end")),
+}
+
+
+@pytest.mark.parametrize("bug", sorted(BUGS))
+def test_raster_bug_fails_the_comparison_that_owns_it(exported, tmp_path, bug):
+    which, name, edit, failing, passing = BUGS[bug]
+    port = _copy(exported[which], tmp_path / "port")
+    _edit_exr(port / name, edit)
+    v = _by_name(judge(port / "port.toml"))
+    assert not v[failing].passed and v[failing].group == GROUP_SCENE
+    assert v[failing].metrics["failing_pixels"] - v[failing].metrics["failing_pixels_edge"] > 0
+    assert "pixels fail" in v[failing].reason
+    for name in passing:
+        assert v[name].passed, (name, v[name].reason)
+
+
+def test_black_port_fails_with_the_reason(exported, tmp_path):
+    port = _copy(exported[1], tmp_path / "port")
+    for f in port.glob("port_*.npy"):
+        np.save(f, np.zeros_like(np.load(f)))
+    for name in ("final.exr", "colour.exr"):
+        _edit_exr(port / name, np.zeros_like)
+    _edit_exr(port / "shadow_0.exr", lambda a: np.full_like(a, 1e-3))  # every texel: a caster at the light
+    verdict = judge(port / "port.toml")
+    assert not verdict.passed
+    v = _by_name(verdict)
+    assert v["inscatter"].reason.startswith("reference inscatter is zero over 100 % of the compared pixels: "
+                                            "this comparison proves nothing")
+    assert not v["end_to_end"].passed and not v["shadow_map[light=0]"].passed
+
+
+def test_missing_map_of_a_shadowed_light_is_bad_input(exported, tmp_path, capsys):
+    port = _copy(exported[0], tmp_path / "port")
+    text = (port / "port.toml").read_text()
+    (port / "port.toml").write_text(text[:text.index("[[shadow_maps]]")])
+    assert main(["verdict", str(port / "port.toml"), "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "shadow_maps" in err and "light 0 (spot)" in err
+    assert not (tmp_path / "out").exists()
+    # a port that declares it has no shadows is judged against the scene without them
+    (port / "port.toml").write_text("shadows = false\n" + text[:text.index("[[shadow_maps]]")])
+    assert load_port(port / "port.toml").has_shadows is False
+
+
+def test_unknown_pass_buffer_is_bad_input(exported, tmp_path):
+    port = _copy(exported[0], tmp_path / "port")
+    text = (port / "port.toml").read_text()
+    (port / "port.toml").write_text(text.replace('buffer = "final"', 'buffer = "finale"'))
+    with pytest.raises(InputError, match=r"passes\[\d\]\.buffer.*finale"):
+        judge(port / "port.toml")
+
+
+def test_edge_zone_shrinks_with_resolution_and_an_error_away_from_edges_fails_at_both_sizes():
+    """The same scene at 160x90 and 640x360: the zone (depth discontinuities, 2 pixels) covers a smaller share
+    of the larger image, and a 5 % error at a point far from every edge fails gpu-half at both sizes, while
+    the unchanged image passes."""
+    shares = []
+    for w, h in ((160, 90), (640, 360)):
+        frame = prepare_frame(load_scene(SCENE, [f"render.width={w}", f"render.height={h}"]))
+        ref = frame.scene_colour
+        zone = edge_zone(2, depths=[frame.gbuffer.depth])
+        shares.append(zone.mean())
+        y, x = int(0.85 * h), int(0.3 * w)  # on the floor in front of the pillars
+        assert not zone[y - 2:y + 3, x - 2:x + 3].any() and ref[y, x].mean() > 0
+        test = ref.copy()
+        test[y, x] *= 1.05
+        assert compare_arrays(ref, ref, "gpu-half", edges=zone, flip=False).passed
+        planted = compare_arrays(ref, test, "gpu-half", edges=zone, flip=False)
+        assert not planted.passed and planted.metrics["failing_pixels"] == 1
+    assert shares[1] < 0.5 * shares[0]
+
+
+def test_edge_zone_geometry():
+    z = np.full((6, 8), 4.0)
+    z[:, 5:] = 8.0   # a silhouette between columns 4 and 5
+    z[0, 0] = np.inf  # sky next to a surface
+    d = depth_discontinuities(z)
+    assert d[:, 3:7].all() and not d[3:, :3].any() and not d[:, 7].any()
+    assert d[0, :3].all() and d[:3, 0].all()
+    assert dilate(d, 1)[5, 2] and not dilate(d, 1)[5, 1]
+    low = block_any(d, (3, 4))  # 2x2 blocks
+    assert low[:, 1:].all() and low[0, 0] and not low[2, 0]
+    # a plane seen at any angle and resolution: inverse depth is affine on screen, no discontinuity
+    y, x = np.mgrid[0:90, 0:160]
+    assert not depth_discontinuities(1.0 / (0.01 + 0.002 * x + 0.05 * y)).any()
+
+
+def test_gpu_presets_allow_no_failing_pixel_outside_the_edge_zone():
+    for name, tol in load_presets().items():
+        if name.startswith(("gpu-", "raster-")) or name == "end-to-end":
+            assert tol.max_fail_fraction == 0 and tol.edge_pixels >= 1, name
+
+
+@settings(max_examples=40, deadline=None)
+@given(value=st.sampled_from([0.0, 1e-30, 1.0]), other=st.sampled_from([0.0, 1.0, 2.0]),
+       preset=st.sampled_from(sorted(load_presets())), with_edges=st.booleans())
+def test_zero_and_constant_images_divide_by_no_zero_bound(value, other, preset, with_edges):
+    ref = np.full((5, 7, 3), value)
+    test = np.full((5, 7, 3), other)
+    edges = np.zeros((5, 7), bool)
+    edges[2, :] = with_edges
+    with np.errstate(all="raise"):
+        report = compare_arrays(ref, test, tolerance(preset), flip=False, edges=edges)
+        margins = report.margins()
+    assert report.passed == (value == other or all(c.passed for c in report.checks))
+    assert all(not math.isnan(m) and m >= 0 for m in margins.values())
+    assert margin(0.0, 0.0) == 0.0 and margin(1.0, 0.0) == math.inf and margin(1.0, 2.0) == 0.5
+
+
+def test_table_names_every_pass(exported):
+    verdict = judge(exported[0] / "port.toml")
+    table = verdict.table()
+    for p in verdict.passes:
+        assert re.search(rf"^\| {re.escape(p.name)} \| {p.group} \|", table, re.M)

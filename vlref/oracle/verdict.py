@@ -1,0 +1,499 @@
+"""The whole-frame verdict on a GPU port: ``vlref verdict PORT.toml -o DIR`` (:func:`judge`).
+
+A port passes only when two judgments pass:
+
+* **on its own buffers** (group ``own buffers``): each pass output the manifest declares (``[[passes]]``)
+  against the same buffer of ``vlref march`` on the port's depth, scene colour and shadow maps
+  (:mod:`vlref.port`): the march and post passes, isolated from the rasteriser;
+* **against the scene** (group ``against the scene``): the port's inputs and its final frame against what
+  the scene says, so that a bug in a raster pass cannot pass by feeding the march a wrong input:
+
+  ``camera``              the port's camera matrices against the scene's camera;
+  ``depth``               its depth buffer against vlref's ray-cast eye depth, compared as inverse depth
+                          ``1/z`` (sky = 0, so a sky / surface mismatch fails; relative errors equal);
+  ``shadow_map[light=i]`` each texel of its maps against vlref's map rendered through the *port's* texel
+                          rays (its light matrices, :func:`vlref.port.decode.tile_rays`): the biased distance
+                          along the ray (:func:`vlref.lights.shadowmaps.cast_rays`), as inverse distance
+                          (empty = 0);
+  ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points against
+                          vlref's maps' (the decision a map implies where the camera looks);
+  ``scene_colour``        its lit scene colour against vlref's shading (:mod:`vlref.lights.shading`);
+  ``end_to_end``          its final frame against ``vlref render`` of the scene.
+
+Every comparison allows no failing pixel outside its edge zone (:mod:`vlref.oracle.edges`): depth
+discontinuities of vlref's and the port's depth and, for shading, the *shadow zone*, the surface points
+whose map lookup lies within ``edge_pixels`` texels of a shadow silhouette of either renderer's maps
+(:func:`shadow_zone`: the lit fraction changes when each texel is replaced by the min or the max of its
+(2k+1)² neighbourhood), all grown by ``edge_pixels`` pixels. The presets of the against-the-scene
+comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``).
+
+Degenerate comparisons fail: when light reaches the camera in vlref's render of the scene (its in-scatter
+is nonzero somewhere), a comparison whose reference is zero over every compared pixel proves nothing and
+fails with that reason. A port whose manifest declares no ``final`` or no ``[[passes]]`` cannot pass the
+group it is missing. Missing shadow maps of shadowed lights are bad input (:func:`vlref.port.load_port`),
+unless the manifest says ``shadows = false``: the port is then judged against the scene without shadows.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import html
+import json
+import math
+import re
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+from scipy import ndimage
+
+from ..errors import InputError
+from ..lights.pack import I_KIND
+from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, lit_at_points
+from ..port.decode import tile_points, tile_rays
+from ..techniques import TECHNIQUES
+from .compare import Report, compare_arrays, margin
+from .edges import block_any, depth_discontinuities, dilate
+from .presets import tolerance
+
+__all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict", "judge",
+           "shadow_zone", "write_verdict"]
+
+GROUP_OWN = "own buffers"
+GROUP_SCENE = "against the scene"
+DEFAULT_PRESET = "gpu-half"
+"""Preset of a ``[[passes]]`` entry that names none, when neither the manifest nor the caller does."""
+SCENE_PRESETS = {"depth": "raster-depth", "shadow_map": "raster-shadow-map", "shadow_test": "raster-shadow-test",
+                 "scene_colour": "raster-colour", "end_to_end": "end-to-end"}
+"""Preset of each against-the-scene comparison."""
+KNIFE_EDGE = 1e-5
+"""Relative nudge of the lights and the shadow-map distances that finds the knife-edge pixels of
+:func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
+KNIFE_JUMP = 1e-3
+"""A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
+CAMERA_TOL = 1e-4
+"""Largest accepted difference of the port's camera from the scene's: position (metres, relative to
+``1 + |position|``), rotation matrix entries, and fov (degrees); float32 matrices round at ~1e-7."""
+
+
+@dataclass(frozen=True)
+class PassVerdict:
+    """One comparison of the verdict: the port's ``name`` for it, its ``group`` (:data:`GROUP_OWN` or
+    :data:`GROUP_SCENE`), the ``preset``, the outcome, why it failed (empty when passed), its numbers
+    (``compared_pixels``, ``failing_pixels``, ``edge_pixels``, ..., ``margins``: check -> value / bound) and
+    the path of its report.html (None without an output folder)."""
+
+    name: str
+    group: str
+    preset: str
+    passed: bool
+    reason: str
+    metrics: dict
+    report: str | None = None
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The whole-frame verdict: passed when every comparison passed."""
+
+    passed: bool
+    manifest: str
+    preset: str | None
+    passes: tuple[PassVerdict, ...]
+
+    def to_dict(self) -> dict:
+        """What ``verdict.json`` holds."""
+        return {"verdict": "pass" if self.passed else "fail", "passed": self.passed, "manifest": self.manifest,
+                "preset": self.preset, "passes": [dataclasses.asdict(p) for p in self.passes]}
+
+    def table(self) -> str:
+        """The verdict as a Markdown table (pass, group, preset, result, failing pixels, margins, reason)."""
+        rows = ["| pass | group | preset | result | failing pixels | margins | reason |", "|---|---|---|---|---|---|---|"]
+        for p in self.passes:
+            m = p.metrics
+            fail = f"{m['failing_pixels']} of {m['compared_pixels']}" if "compared_pixels" in m else "-"
+            margins = ", ".join(f"{k} {_fmt_margin(v)}" for k, v in m.get("margins", {}).items()) or "-"
+            rows.append(f"| {p.name} | {p.group} | {p.preset} | {'PASS' if p.passed else 'FAIL'} | {fail} | {margins} "
+                        f"| {p.reason or '-'} |")
+        rows.append(f"\n{'PASS' if self.passed else 'FAIL'}: {sum(p.passed for p in self.passes)} of "
+                    f"{len(self.passes)} comparisons pass")
+        return "\n".join(rows)
+
+
+def _fmt_margin(v: float) -> str:
+    return "inf" if math.isinf(v) else f"{v:.3g}x"
+
+
+@dataclass
+class _Comparison:
+    """A comparison before its files are written: the report (None for a check without images)."""
+
+    name: str
+    group: str
+    preset: str
+    report: Report | None
+    reason: str = ""
+    metrics: dict = dataclasses.field(default_factory=dict)
+
+
+# --------------------------------------------------------------------------- shadow zone and lookups
+
+def _lit(maps: ShadowMaps, packed, light: int, points: np.ndarray) -> np.ndarray:
+    """(N,) lit fraction (mean over RGB, strength not applied) of ``light``'s map at world ``points``."""
+    out = np.empty(len(points))
+    lit_at_points(maps.table, int(packed.ints[light, I_KIND]), packed.floats.astype(np.float64), light,
+                  np.ascontiguousarray(points, dtype=np.float64), out)
+    return out
+
+
+def _filtered(maps: ShadowMaps, light: int, k: int, extreme) -> ShadowMaps:
+    """``maps`` with every texel of ``light``'s tiles replaced by ``extreme`` (min or max filter) of its
+    (2k+1)² neighbourhood inside the tile."""
+    data = maps.data.copy()
+    for _, li, start, count in maps.names:
+        if li == light:
+            res = int(round(math.sqrt(count)))
+            tile = data[start:start + count].reshape(res, res)
+            data[start:start + count] = extreme(tile, size=2 * k + 1, mode="nearest").ravel()
+    return ShadowMaps(maps.ints, maps.floats, data, maps.tint, maps.names)
+
+
+def _mapped(maps: ShadowMaps, light: int) -> bool:
+    return maps.mode(light) in (SHADOW_HARD, SHADOW_PCF)
+
+
+def shadow_zone(maps: ShadowMaps, packed, points: np.ndarray, k: int) -> np.ndarray:
+    """(N,) bool: ``points`` whose lookup in some light's map lies within ``k`` texels of a shadow
+    silhouette: the lit fraction differs between the map's min- and max-filtered ((2k+1)² texels) copies."""
+    zone = np.zeros(len(points), bool)
+    for light in range(packed.count):
+        if _mapped(maps, light) and k > 0:
+            lo = _lit(_filtered(maps, light, k, ndimage.minimum_filter), packed, light, points)
+            hi = _lit(_filtered(maps, light, k, ndimage.maximum_filter), packed, light, points)
+            zone |= lo != hi
+    return zone
+
+
+def _on_pixels(values: np.ndarray, hit: np.ndarray, fill=0.0) -> np.ndarray:
+    """Per-point ``values`` of the hit pixels back on the (H, W) image."""
+    out = np.full(hit.shape, fill, dtype=values.dtype)
+    out[hit] = values
+    return out
+
+
+def _inverse(z: np.ndarray) -> np.ndarray:
+    """``1/z`` with non-finite or NaN ``z`` (sky, empty texel) as 0."""
+    z = np.asarray(z, dtype=np.float64)
+    ok = np.isfinite(z) & (z > 0)
+    return np.where(ok, 1.0 / np.where(ok, z, 1.0), 0.0)
+
+
+# --------------------------------------------------------------------------- shadow maps through the port's rays
+
+def _port_tile_distances(tile, light, sh, encoding: str, convention: str, geometry):
+    """(res, res) vlref's and the port's biased distance along each texel ray of a port ``tile``: the eye
+    (perspective) or the view plane (orthographic) to the first opaque hit, plus bias (``inf`` = empty).
+    Spot and point lights: distances beyond ``range`` count as empty in both (a port's far plane is a plane,
+    vlref's range a sphere; no light reaches there)."""
+    res = tile.texels.shape[0]
+    origin_v, dir_v = tile_rays(tile, res)
+    inv_v = np.linalg.inv(tile.view)
+    rot, shift = inv_v[:3, :3], inv_v[:3, 3]
+    origin, d = origin_v @ rot.T + shift, dir_v @ rot.T
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    if light.type == "directional":
+        start, tmax = np.zeros(len(d)), np.full(len(d), np.inf)
+    else:
+        start = sh.near / np.abs(dir_v[:, 2])  # the light's near plane along each ray
+        tmax = np.maximum(light.range - start, 0.0)
+    ref = cast_rays(geometry, origin + start[:, None] * d, d, start, tmax, sh.bias, sh.slope_bias)
+    port = np.einsum("ij,ij->i", tile_points(tile, encoding, convention) - origin, d)
+    port = np.where(np.isnan(port), np.inf, port)
+    if light.type != "directional":
+        ref, port = (np.where(a > light.range, np.inf, a) for a in (ref, port))
+    return ref.reshape(res, res), port.reshape(res, res)
+
+
+# --------------------------------------------------------------------------- judging
+
+def _reason(report: Report) -> str:
+    """Why a report failed: its failing checks."""
+    m = report.metrics
+    parts = []
+    for c in report.checks:
+        if c.passed is False:
+            if c.name == "failing_fraction":
+                parts.append(f"{m['failing_pixels']} of {m['compared_pixels']} pixels fail "
+                             f"({m['failing_pixels'] - m['failing_pixels_edge']} outside the edge zone of "
+                             f"{m['edge_pixels']} pixels; allowed fraction {c.bound:g})")
+            else:
+                parts.append(f"{c.name} {c.value:.4g} > {c.bound:.4g}")
+    return "; ".join(parts)
+
+
+def _judged(name: str, group: str, report: Report, silent_check: bool, buffer: str) -> _Comparison:
+    """A comparison from its report; a zero reference over every compared pixel fails when ``silent_check``
+    (light reaches the camera, so such a comparison proves nothing)."""
+    reason = _reason(report) if not report.passed else ""
+    if silent_check and not np.any(report.ref[report.mask] != 0):
+        reason = (f"reference {buffer} is zero over 100 % of the compared pixels: this comparison proves nothing"
+                  + (f"; {reason}" if reason else ""))
+    return _Comparison(name, group, report.tolerance.name, report, reason)
+
+
+def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, names) -> _Comparison:
+    """``compare_arrays`` of vlref's ``ref`` and the port's ``test``; a non-finite port value where vlref's is
+    compared (finite) is a failing pixel (set to float32's max), not bad input."""
+    tol = tolerance(preset)
+    t = np.asarray(test, dtype=np.float64)
+    t = t[:, :, None] if t.ndim == 2 else t
+    compared = np.ones(t.shape[:2], bool) if mask is None else mask
+    t = np.where(~np.isfinite(t) & compared[:, :, None], float(np.finfo(np.float32).max), t)
+    report = compare_arrays(ref, t, tol, mask, flip=False, names=names, edges=zone)
+    return _judged(name, group, report, light_reaches, buffer)
+
+
+def _camera_check(port, scene_camera) -> _Comparison:
+    c = port.camera
+    diffs = {"position": float(np.max(np.abs(c.position - scene_camera.position)))
+             / (1.0 + float(np.linalg.norm(scene_camera.position))),
+             "rotation": float(np.max(np.abs(c.rotation - scene_camera.rotation))),
+             "fov": abs(c.fov - scene_camera.fov)}
+    bad = [f"{k} differs by {v:.3g} (> {CAMERA_TOL:g})" for k, v in diffs.items() if not v <= CAMERA_TOL]
+    metrics = {"margins": {k: margin(v, CAMERA_TOL) for k, v in diffs.items()}}
+    reason = "the port's camera is not the scene's: " + ", ".join(bad) if bad else ""
+    return _Comparison("camera", GROUP_SCENE, "-", None, reason, metrics)
+
+
+def _scene_without_shadows(scene):
+    return scene.replace(lights=tuple(dataclasses.replace(li, shadows=None) for li in scene.lights))
+
+
+def _nudged(port, frame_p, sign: int):
+    """The port's frame with every light moved by ``sign · KNIFE_EDGE · (1 + |position|)`` along (1, 1, 1)/√3
+    and every shadow-map distance scaled by ``1 + sign · KNIFE_EDGE``."""
+    from ..lights import pack_lights
+
+    step = sign * KNIFE_EDGE
+    scene = port.scene.replace(lights=tuple(
+        dataclasses.replace(li, position=tuple(np.asarray(li.position, dtype=np.float64)
+                                               + step * (1.0 + np.linalg.norm(li.position)) / math.sqrt(3.0)))
+        for li in port.scene.lights))
+    cache = {k: ShadowMaps(m.ints, m.floats, (m.data * np.float32(1.0 + step)).astype(np.float32), m.tint, m.names)
+             for k, m in frame_p.shadow_cache.items()}
+    return scene, dataclasses.replace(frame_p, scene=scene, lights=pack_lights(scene), shadow_cache=cache)
+
+
+def knife_edges(port, frame_p, technique) -> dict[str, np.ndarray]:
+    """Per float image buffer of the technique, (h, w) bool: its knife-edge pixels, whose value jumps when the
+    lights move by ``KNIFE_EDGE`` (relative) and the map distances scale by ``1 ± KNIFE_EDGE``: a march
+    sample there lies on a discrete decision (a shadow-volume boundary, a shadow-map texel boundary, a
+    light cone's surface), which a float32 port may take the other way. A jump is a change of more than
+    ``KNIFE_JUMP · (|value| + mean |value|)`` in a channel (continuous changes are ~KNIFE_EDGE). Downstream
+    passes (upsample, blur, composite) carry the jump, so each buffer's own pixels are marked."""
+    lo = technique.render(*_nudged(port, frame_p, -1))
+    hi = technique.render(*_nudged(port, frame_p, 1))
+    out = {}
+    for name, a in lo.items():
+        a, b = np.asarray(a), np.asarray(hi.get(name))
+        if a.dtype.kind != "f" or a.ndim not in (2, 3) or b.shape != a.shape:
+            continue
+        a, b = (x[:, :, None] if x.ndim == 2 else x for x in (a, b))
+        finite = np.isfinite(a) & np.isfinite(b)
+        level = float(np.mean(np.abs(a[finite]))) if finite.any() else 0.0
+        fa, fb = np.where(finite, a, 0.0), np.where(finite, b, 0.0)
+        jump = np.where(finite, np.abs(fb - fa) > KNIFE_JUMP * (np.abs(fa) + level), a != b)
+        out[name] = jump.any(axis=2)
+    return out
+
+
+def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique) -> list[_Comparison]:
+    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers."""
+    if not port.passes:
+        return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
+                                                           "march and post passes are not judged")]
+    hit = np.isfinite(port.depth)
+    points = frame_p.gbuffer.position[hit]
+    zones: dict[int, np.ndarray] = {}
+    knife = knife_edges(port, frame_p, technique)
+    out = []
+    for k, p in enumerate(port.passes):
+        if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
+            known = ", ".join(sorted(n for n, a in own.items() if np.asarray(a).dtype.kind == "f"))
+            raise InputError(port.source, f"passes[{k}].buffer", f"vlref's {port.scene.render.technique} has no "
+                                                                  f"buffer {p.buffer!r} (its buffers: {known})")
+        name_preset = p.preset or preset
+        tol = tolerance(name_preset)
+        if tol.edge_pixels not in zones:
+            surface = _on_pixels(shadow_zone(frame_p.shadow_maps(), frame_p.lights, points, tol.edge_pixels), hit, False)
+            zones[tol.edge_pixels] = dilate(depth_discontinuities(port.depth) | surface, tol.edge_pixels)
+        ref = np.asarray(own[p.buffer], dtype=np.float64)
+        ref = ref[:, :, None] if ref.ndim == 2 else ref
+        zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if ref.shape[0] <= hit.shape[0] else None
+        if zone is not None and p.buffer in knife and tol.edge_pixels > 0:
+            zone |= knife[p.buffer]
+        mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
+        out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, light_reaches, p.buffer,
+                            (f"vlref march {p.buffer}", p.path)))
+    return out
+
+
+def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence[str] = ()) -> Verdict:
+    """The whole-frame verdict on the port of ``manifest`` (module docstring); with ``out_dir``, writes
+    verdict.json, index.html and one report folder per comparison there (all or nothing).
+
+    ``preset``: the preset of ``[[passes]]`` entries that name none and of a manifest without ``preset``
+    (default :data:`DEFAULT_PRESET`); ``overrides``: ``--set`` overrides of the scene. Raises
+    :class:`InputError` on bad input (unknown preset, missing shadow map of a shadowed light, a pass naming
+    no vlref buffer, sizes that differ).
+    """
+    from ..port import load_port, port_frame
+    from ..render import prepare_frame
+
+    port = load_port(manifest, overrides)
+    own_preset = port.preset or preset or DEFAULT_PRESET
+    for name in {own_preset, *(p.preset for p in port.passes if p.preset), *SCENE_PRESETS.values()}:
+        tolerance(name)  # unknown presets are bad input before any work
+    technique = TECHNIQUES[port.scene.render.technique]
+
+    scene = port.scene if port.has_shadows else _scene_without_shadows(port.scene)
+    frame = prepare_frame(scene)
+    reference = technique.render(frame.scene, frame)
+    light_reaches = bool(np.any(np.asarray(reference["inscatter"]) > 0))
+    frame_p = port_frame(port)
+    own = technique.render(port.scene, frame_p)
+
+    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique)
+    comparisons.append(_camera_check(port, frame.camera))
+    comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
+    passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
+                               str(Path(out_dir) / _slug(c.group) / _slug(c.name) / "report.html")
+                               if out_dir is not None and c.report is not None else None) for c in comparisons)
+    verdict = Verdict(all(p.passed for p in passes), str(manifest), own_preset, passes)
+    if out_dir is not None:
+        write_verdict(verdict, comparisons, out_dir)
+    return verdict
+
+
+def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -> list[_Comparison]:
+    """The port's depth, shadow maps, shadow decisions, scene colour and final frame against the scene."""
+    g = frame.gbuffer
+    hit = np.isfinite(g.depth)
+    points = g.position[hit]
+    maps_ref, maps_port = frame.shadow_maps(), frame_p.shadow_maps()
+    packed = frame.lights
+    out = []
+
+    def k_of(kind):
+        return tolerance(SCENE_PRESETS[kind]).edge_pixels
+
+    depth_edges = depth_discontinuities(g.depth) | depth_discontinuities(port.depth)
+    out.append(_compare("depth", GROUP_SCENE, _inverse(g.depth), _inverse(port.depth), SCENE_PRESETS["depth"], None,
+                        dilate(depth_edges, k_of("depth")), False, "depth", ("vlref ray-cast depth", "port depth")))
+
+    for m in port.shadow_maps:
+        i = m.light
+        if not (_mapped(maps_ref, i) and _mapped(maps_port, i)):
+            continue
+        light, sh = port.scene.lights[i], port.scene.lights[i].shadows
+        ref_tiles, port_tiles, zones = [], [], []
+        k = k_of("shadow_map")
+        for tile in m.tiles:
+            r, p = _port_tile_distances(tile, light, sh, m.encoding, m.convention, frame.geometry)
+            ref_tiles.append(r)
+            port_tiles.append(p)
+            zones.append(dilate(depth_discontinuities(r) | depth_discontinuities(p), k))
+        out.append(_compare(f"shadow_map[light={i}]", GROUP_SCENE, _inverse(np.hstack(ref_tiles)),
+                            _inverse(np.hstack(port_tiles)), SCENE_PRESETS["shadow_map"], None, np.hstack(zones),
+                            False, f"shadow map of light {i}",
+                            (f"vlref map of light {i} through the port's texel rays", f"port map of light {i}")))
+        k = k_of("shadow_test")
+        zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+        out.append(_compare(f"shadow_test[light={i}]", GROUP_SCENE,
+                            _on_pixels(_lit(maps_ref, packed, i, points), hit),
+                            _on_pixels(_lit(maps_port, packed, i, points), hit), SCENE_PRESETS["shadow_test"], hit,
+                            dilate(_on_pixels(zone, hit, False) | depth_edges, k), False, f"lit fraction of light {i}",
+                            (f"vlref map lookups of light {i} at the visible surface points",
+                             f"port map lookups of light {i}")))
+
+    def shading_zone(kind):
+        k = k_of(kind)
+        zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+        return dilate(_on_pixels(zone, hit, False) | depth_edges, k)
+
+    out.append(_compare("scene_colour", GROUP_SCENE, frame.scene_colour, port.colour, SCENE_PRESETS["scene_colour"],
+                        None, shading_zone("scene_colour"), False,
+                        "scene_colour", ("vlref scene colour", "port colour")))
+    if port.final is None:
+        out.append(_Comparison("end_to_end", GROUP_SCENE, SCENE_PRESETS["end_to_end"], None,
+                               "the manifest declares no `final`: the port's frame is not judged against the scene"))
+    else:
+        out.append(_compare("end_to_end", GROUP_SCENE, reference["final"], port.final, SCENE_PRESETS["end_to_end"],
+                            None, shading_zone("end_to_end"), light_reaches, "final",
+                            ("vlref render final", "port final")))
+    return out
+
+
+def _metrics(c: _Comparison) -> dict:
+    if c.report is None:
+        return dict(c.metrics)
+    m = c.report.metrics
+    keys = ("compared_pixels", "failing_pixels", "failing_pixels_edge", "edge_pixels", "max_abs", "mean_abs",
+            "mean_abs_outside_edges", "ref_mean_abs")
+    return {**{k: m[k] for k in keys}, "margins": c.report.margins()}
+
+
+def _slug(name: str) -> str:
+    return re.sub(r"[^A-Za-z0-9_.-]+", "_", name).strip("_")
+
+
+# --------------------------------------------------------------------------- files
+
+def write_verdict(verdict: Verdict, comparisons: Sequence[_Comparison], out_dir) -> None:
+    """verdict.json, index.html and each comparison's report folder (:func:`vlref.oracle.report.write_outputs`)
+    into ``out_dir``, all or nothing."""
+    from ..io import output_dir, write_text
+    from .report import json_ready, write_outputs
+
+    with output_dir(out_dir) as tmp:
+        for c in comparisons:
+            if c.report is not None:
+                write_outputs(c.report, tmp / _slug(c.group) / _slug(c.name))
+        write_text(tmp / "verdict.json", json.dumps(json_ready(verdict.to_dict()), indent=2, allow_nan=False) + "\n")
+        write_text(tmp / "index.html", _index_html(verdict))
+
+
+def _index_html(verdict: Verdict) -> str:
+    """The verdict page: the table (failing rows first in red, each linking to its report) and, for each
+    failing comparison with images, its heat map of |port - vlref|."""
+    rows, figures = [], []
+    for p in sorted(verdict.passes, key=lambda p: p.passed):
+        rel = f"{_slug(p.group)}/{_slug(p.name)}/report.html" if p.report else None
+        link = f'<a href="{rel}">{html.escape(p.name)}</a>' if rel else html.escape(p.name)
+        m = p.metrics
+        fail = f"{m['failing_pixels']} of {m['compared_pixels']}" if "compared_pixels" in m else "-"
+        margins = ", ".join(f"{html.escape(k)} {_fmt_margin(v)}" for k, v in m.get("margins", {}).items())
+        style = "" if p.passed else ' style="color:#cf222e"'
+        rows.append(f"<tr{style}><td>{link}</td><td>{html.escape(p.group)}</td><td>{html.escape(p.preset)}</td>"
+                    f"<td>{'PASS' if p.passed else 'FAIL'}</td><td>{fail}</td><td>{margins}</td>"
+                    f"<td>{html.escape(p.reason)}</td></tr>")
+        if not p.passed and rel:
+            figures.append(f'<figure><figcaption>{html.escape(p.name)} ({html.escape(p.group)}): |port - vlref|'
+                           f'</figcaption><a href="{rel}"><img src="{_slug(p.group)}/{_slug(p.name)}/heatmap.png" '
+                           f'width="480"></a></figure>')
+    word = "PASS" if verdict.passed else "FAIL"
+    colour = "#1a7f37" if verdict.passed else "#cf222e"
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>vlref verdict: {word}</title>
+<style>body {{ font-family: system-ui, sans-serif; margin: 1.5em; }} h1 span {{ color: {colour}; }}
+table {{ border-collapse: collapse; font-size: 0.9em; }} td, th {{ border: 1px solid #d0d7de; padding: 2px 8px; }}
+img {{ image-rendering: pixelated; }}</style></head><body>
+<h1>vlref verdict: <span>{word}</span></h1>
+<p>{html.escape(verdict.manifest)}: a port passes when every comparison passes, on its own buffers and against
+the scene.</p>
+<table><tr><th>pass</th><th>group</th><th>preset</th><th>result</th><th>failing pixels</th><th>margins</th>
+<th>reason</th></tr>{''.join(rows)}</table>
+{''.join(figures)}
+</body></html>
+"""
