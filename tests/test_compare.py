@@ -138,7 +138,7 @@ def test_presets_load_and_loosen_in_order():
     for key in ("abs_tol", "rel_tol", "max_mean_abs", "edge_pixels", "edge_rel", "edge_abs"):
         values = [getattr(presets[n], key) for n in order]
         assert all(a < b for a, b in zip(values, values[1:])), key
-    # GPU ports: no failing pixel outside the edge zone (issue 24); float32 keeps its knife-edge share
+    # GPU ports: no failing pixel outside the edge zone; float32 keeps its knife-edge share
     assert [presets[n].max_fail_fraction for n in order] == [1e-3, 0.0, 0.0, 0.0]
     for p in presets.values():
         assert p.description and p.max_flip_mean is None

@@ -113,12 +113,15 @@ def test_black_port_fails_with_the_reason(exported, tmp_path):
     for name in ("final.exr", "colour.exr"):
         _edit_exr(port / name, np.zeros_like)
     _edit_exr(port / "shadow_0.exr", lambda a: np.full_like(a, 1e-3))  # every texel: a caster at the light
-    verdict = judge(port / "port.toml")
-    assert not verdict.passed
-    v = _by_name(verdict)
-    assert v["inscatter"].reason.startswith("reference inscatter is zero over 100 % of the compared pixels: "
-                                            "this comparison proves nothing")
-    assert not v["end_to_end"].passed and not v["shadow_map[light=0]"].passed
+    out = tmp_path / "verdict"
+    assert main(["verdict", str(port / "port.toml"), "-o", str(out), "-q"]) == 1
+    v = {p["name"]: p for p in json.loads((out / "verdict.json").read_text())["passes"]}
+    assert v["inscatter"]["reason"].startswith("reference inscatter is zero over 100 % of the compared pixels: "
+                                               "this comparison proves nothing")
+    assert not v["end_to_end"]["passed"] and not v["shadow_map[light=0]"]["passed"]
+    page = (out / "index.html").read_text()
+    assert "FAIL" in page and "this comparison proves nothing" in page
+    assert "against_the_scene/end_to_end/heatmap.png" in page  # the page shows where
 
 
 def test_missing_map_of_a_shadowed_light_is_bad_input(exported, tmp_path, capsys):

@@ -330,7 +330,8 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, tech
             zones[tol.edge_pixels] = dilate(depth_discontinuities(port.depth) | surface, tol.edge_pixels)
         ref = np.asarray(own[p.buffer], dtype=np.float64)
         ref = ref[:, :, None] if ref.ndim == 2 else ref
-        zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if ref.shape[0] <= hit.shape[0] else None
+        fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
+        zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
         if zone is not None and p.buffer in knife and tol.edge_pixels > 0:
             zone |= knife[p.buffer]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None

@@ -11,6 +11,9 @@ Manifest (TOML; paths relative to it)::
     scene = "scene.toml"            # medium, lights, technique params: a vlref scene file or bundled name
     set = ["render.steps=16"]       # optional --set overrides of the scene (render size = the depth's)
     colour = "colour.exr"           # optional (H, W, 3) lit scene colour; default black
+    shadows = true                  # false: the port renders no shadows (no map needed for shadowed lights)
+    final = "final.npy"             # vlref verdict: the port's (H, W, 3) final frame
+    preset = "gpu-half"             # vlref verdict: default preset of the [[passes]]
     [camera]                        # optional: default the scene's camera
     view = [[...4 rows...]]         # world -> view, column vectors
     projection = [[...]]            # view -> clip
@@ -35,6 +38,12 @@ Manifest (TOML; paths relative to it)::
     face = "px"                     # point only: px, nx, py, ny, pz, nz (any order, each once)
     view = [[...]]
     projection = [[...]]
+    [[passes]]                      # vlref verdict: one per pass output of the port
+    name = "march"                  # the port's name
+    buffer = "march_half"           # the vlref --stages buffer it reproduces
+    path = "port_march.npy"
+    preset = "gpu-half"             # optional
+    ignore_sky = false              # compare only where vlref's buffer is finite
 
 Decoding (float64):
 
@@ -54,7 +63,8 @@ Decoding (float64):
   ``look_rotation(direction)``, fov = spot_angle; cube faces: the D3D frames; cascades: vlref's spheres)
   every texel maps to itself and the conversion is exact; otherwise it is a nearest resample.
 * The filter (hard / pcf) and strength are the scene's (each technique may force its own filter); maps
-  carry no transparent layer. Lights without a port map are unshadowed.
+  carry no transparent layer. Every scene light with hard or pcf shadows needs a map (else InputError
+  naming the light) unless ``shadows = false``; lights without a port map are then unshadowed.
 
 Modules: :mod:`.decode` (depth and matrix conventions, texel -> world point), :mod:`.manifest` (reading and
 checking ``port.toml``), :mod:`.shadows` (a port's maps -> vlref's packed shadow maps), :mod:`.frame` (the
