@@ -46,6 +46,13 @@ INCLUDES = {"gbuffer": ("common",), "shadow": (), "lighting": ("common", "lights
 RENDER_PASSES = ("gbuffer", "shadow", "lighting")
 POST_PASSES = ("downsample", "volumes", "upsample", "blur_h", "blur_v", "composite")
 RES_FACTOR = {"full": 1, "half": 2, "quarter": 4}
+PASSES = (("depth_lo", "depth_half", "float32"), ("march", "march_half", None), ("upsample", "upsample", None),
+          ("blur_h", "blur_h", None), ("blur_v", "blur_v", None), ("transmittance", "transmittance", None),
+          ("final", "final", None))
+"""(port output, the ``vlref march --stages`` buffer it reproduces, its preset): the manifest's ``[[passes]]``.
+The march runs at half resolution and the light buffers are fp16: the variant's preset (``gpu-half``; a
+float32 variant: ``float32``), None here. The min-depth downsample is exact up to float32 decoding:
+``float32``, sky texels (``inf`` in both) left out (``ignore_sky``)."""
 
 
 BACKENDS = ("Vulkan", "Metal", "D3D12")
@@ -397,16 +404,20 @@ def _toml(v) -> str:
     return repr(float(v)) if isinstance(v, float) else str(v)
 
 
-def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: dict | None = None) -> Path:
+def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: dict | None = None,
+           preset: str = "gpu-half") -> Path:
     """Write the port's depth, colour and shadow maps (``.npy``, float32, row 0 on top) with ``port.toml``,
-    and each of ``passes`` as ``port_<name>.npy``; returns the manifest's path."""
+    and each of ``passes`` as ``port_<name>.npy``, declared in ``[[passes]]`` (:data:`PASSES`, ``preset``) with
+    ``final`` for ``vlref verdict``; returns the manifest's path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cam = port.cam
     raster = port.raster_buffers()
+    passes = passes or {}
     np.save(out / "depth.npy", raster["depth"])
     np.save(out / "colour.npy", raster["colour"])
-    lines = [f"scene = {_toml(scene_ref)}", f"set = {_toml(list(overrides))}", 'colour = "colour.npy"', "",
+    lines = [f"scene = {_toml(scene_ref)}", f"set = {_toml(list(overrides))}", 'colour = "colour.npy"',
+             *(['final = "port_final.npy"'] if "final" in passes else []), f"preset = {_toml(preset)}", "",
              "[camera]", 'forward = "+z"', 'convention = "reversed"', f"view = {_toml(cam.view)}",
              f"projection = {_toml(cam.projection)}", "",
              "[depth]", 'path = "depth.npy"', 'encoding = "raw"', 'convention = "reversed"',
@@ -421,8 +432,12 @@ def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: di
         for face, view, proj, _ in tiles:
             lines += ["[[shadow_maps.tiles]]"] + ([f'face = "{face}"'] if face else [])
             lines += [f"view = {_toml(view)}", f"projection = {_toml(proj)}", ""]
+    for name, buffer, pass_preset in PASSES:
+        if name in passes:
+            lines += ["[[passes]]", f"name = {_toml(name)}", f"buffer = {_toml(buffer)}", f'path = "port_{name}.npy"']
+            lines += [f"preset = {_toml(pass_preset)}", "ignore_sky = true", ""] if pass_preset else [""]
     (out / "port.toml").write_text("\n".join(lines))
-    for name, a in (passes or {}).items():
+    for name, a in passes.items():
         np.save(out / f"port_{name}.npy", np.asarray(a, dtype=np.float32))
     return out / "port.toml"
 
@@ -442,10 +457,10 @@ def main(argv=None) -> int:
         overrides += [f"render.width={int(w)}", f"render.height={int(h)}"]
     scene = kz_scene.load(args.scene, overrides)
     start = time.perf_counter()
-    port = KillzonePort(scene)
+    port = KillzonePort(scene, raster_variant=args.variant)
     passes = port.run(args.variant)
     ref = args.scene if Path(args.scene).suffix != ".toml" else str(Path(args.scene).resolve())
-    path = export(port, args.output, ref, overrides, passes)
+    path = export(port, args.output, ref, overrides, passes, VARIANTS[args.variant].preset)
     total = time.perf_counter() - start
     print(f"wrote {path} ({port.adapter.info['device']}, {total:.2f} s)")
     for name, t in port.timings.items():

@@ -152,7 +152,7 @@ def _cylinder(center, radius, height, rot, segments=48):
     return np.array(tri, dtype=np.float64) @ rot.T + center
 
 
-def _sphere(center, radius, segments=32, rings=16):
+def _sphere(center, radius, segments=64, rings=32):
     th = np.linspace(0.0, math.pi, rings + 1)
     ph = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     p = np.stack([np.sin(th)[:, None] * np.cos(ph)[None], np.cos(th)[:, None] * np.ones_like(ph)[None],
@@ -178,7 +178,7 @@ def _plane(point, normal, eye, half):
 def tessellate(scene, eye, plane_half: float) -> np.ndarray:
     """Triangle list ``(n, 9)`` float32: position, flat normal, albedo per vertex (world space).
 
-    Analytic primitives are tessellated (cylinders 48 segments, spheres 32x16; the infinite plane is a
+    Analytic primitives are tessellated (cylinders 48 segments, spheres 64x32; the infinite plane is a
     square of half-size ``plane_half`` centred under the camera); OBJ meshes go as they are (vlref's
     OBJ reader). Faces are wound either way: the port draws without culling.
     """

@@ -37,6 +37,7 @@ unless the manifest says ``shadows = false``: the port is then judged against th
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import html
 import json
 import math
@@ -308,15 +309,20 @@ def knife_edges(port, frame_p, technique) -> dict[str, np.ndarray]:
     return out
 
 
-def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique) -> list[_Comparison]:
-    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers."""
+def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique,
+                memo: dict | None = None) -> list[_Comparison]:
+    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers; ``memo`` keeps the knife-edge
+    pixels and edge zones of these buffers for the next call (:func:`judge`'s cache)."""
     if not port.passes:
         return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
                                                            "march and post passes are not judged")]
     hit = np.isfinite(port.depth)
     points = frame_p.gbuffer.position[hit]
-    zones: dict[int, np.ndarray] = {}
-    knife = knife_edges(port, frame_p, technique)
+    memo = {} if memo is None else memo
+    zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
+    if "knife" not in memo:
+        memo["knife"] = knife_edges(port, frame_p, technique)
+    knife = memo["knife"]
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -333,24 +339,38 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, tech
         fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
         if zone is not None and p.buffer in knife and tol.edge_pixels > 0:
-            zone |= knife[p.buffer]
+            zone = zone | knife[p.buffer]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, light_reaches, p.buffer,
                             (f"vlref march {p.buffer}", p.path)))
     return out
 
 
-def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence[str] = ()) -> Verdict:
+def _port_digest(port) -> str:
+    """A digest of what vlref's march on a port reads: its scene, camera, depth, colour and shadow maps."""
+    from ..render import scene_hash
+
+    h = hashlib.sha256(scene_hash(port.scene).encode())
+    h.update(repr((port.camera, port.has_shadows)).encode())
+    for a in (port.depth, port.colour, *(t.texels for m in port.shadow_maps for t in m.tiles)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence[str] = (), *,
+          cache: dict | None = None) -> Verdict:
     """The whole-frame verdict on the port of ``manifest`` (module docstring); with ``out_dir``, writes
     verdict.json, index.html and one report folder per comparison there (all or nothing).
 
     ``preset``: the preset of ``[[passes]]`` entries that name none and of a manifest without ``preset``
-    (default :data:`DEFAULT_PRESET`); ``overrides``: ``--set`` overrides of the scene. Raises
-    :class:`InputError` on bad input (unknown preset, missing shadow map of a shadowed light, a pass naming
-    no vlref buffer, sizes that differ).
+    (default :data:`DEFAULT_PRESET`); ``overrides``: ``--set`` overrides of the scene. ``cache``: a dict the
+    caller keeps across calls: vlref's render of a scene, and its march (with the knife-edge pixels) on a
+    port's buffers, are kept there by content (scene hash; a digest of the port's raster buffers), so that
+    judging many variants of one port re-renders nothing they share. Raises :class:`InputError` on bad input
+    (unknown preset, missing shadow map of a shadowed light, a pass naming no vlref buffer, sizes that differ).
     """
     from ..port import load_port, port_frame
-    from ..render import prepare_frame
+    from ..render import prepare_frame, scene_hash
 
     port = load_port(manifest, overrides)
     own_preset = port.preset or preset or DEFAULT_PRESET
@@ -358,14 +378,21 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
         tolerance(name)  # unknown presets are bad input before any work
     technique = TECHNIQUES[port.scene.render.technique]
 
+    cache = {} if cache is None else cache
     scene = port.scene if port.has_shadows else _scene_without_shadows(port.scene)
-    frame = prepare_frame(scene)
-    reference = technique.render(frame.scene, frame)
-    light_reaches = bool(np.any(np.asarray(reference["inscatter"]) > 0))
-    frame_p = port_frame(port)
-    own = technique.render(port.scene, frame_p)
+    key = ("scene", scene_hash(scene))
+    if key not in cache:
+        frame = prepare_frame(scene)
+        reference = technique.render(frame.scene, frame)
+        cache[key] = frame, reference, bool(np.any(np.asarray(reference["inscatter"]) > 0))
+    frame, reference, light_reaches = cache[key]
+    key = ("port", _port_digest(port))
+    if key not in cache:
+        frame_p = port_frame(port)
+        cache[key] = frame_p, technique.render(port.scene, frame_p), {}
+    frame_p, own, memo = cache[key]
 
-    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique)
+    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique, memo)
     comparisons.append(_camera_check(port, frame.camera))
     comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
