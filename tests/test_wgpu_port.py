@@ -41,7 +41,7 @@ def device():
 
 @pytest.fixture(scope="module")
 def runs(device, tmp_path_factory):
-    """``runs(scene, size)``: the faithful port of a scene at a size and vlref's march on it, made once."""
+    """``runs(scene, size)``: the faithful port of a scene at a size and the verdict's cache, made once."""
     cache = {}
 
     def get(scene: str, size: str):
@@ -53,15 +53,24 @@ def runs(device, tmp_path_factory):
     return get
 
 
-def test_port_depth_matches_vlref_ray_cast_depth_off_silhouettes(runs):
+@pytest.fixture(scope="module")
+def faithful(device, tmp_path_factory):
+    """The walk-through by hand: the faithful port of pillars_point at 160x90, `vlref march --stages` on it."""
+    out = tmp_path_factory.mktemp("walk-through")
+    port, passes, marched, _ = kz_check.render_and_march(out, ("render.width=160", "render.height=90") + STEPS,
+                                                         device)
+    return port, passes, marched, out
+
+
+def test_port_depth_matches_vlref_ray_cast_depth_off_silhouettes(faithful):
     """The port's rasterised, reversed-Z depth32float buffer decodes (by vlref) to vlref's own ray-cast depth,
     except where tessellated cylinders and spheres and their silhouettes differ from the analytic shapes."""
     from vlref.io import read_image
     from vlref.render import prepare_frame
 
-    run = runs("pillars_point", "160x90")
-    got = read_image(run.marched / "depth.exr")[..., 0]
-    want = prepare_frame(run.port.scene).gbuffer.depth
+    port, _, marched, _ = faithful
+    got = read_image(marched / "depth.exr")[..., 0]
+    want = prepare_frame(port.scene).gbuffer.depth
     both = np.isfinite(got) & np.isfinite(want)
     assert both.mean() > 0.5 and (np.isfinite(got) != np.isfinite(want)).mean() < 0.01
     rel = np.abs(got[both] - want[both]) / want[both]
@@ -69,24 +78,25 @@ def test_port_depth_matches_vlref_ray_cast_depth_off_silhouettes(runs):
     assert (rel < 1e-2).mean() > 0.97     # all but silhouettes of tessellated curved objects
 
 
-def test_faithful_port_passes_every_pass_with_zero_failing_pixels(runs):
-    run = runs("pillars_point", "160x90")
-    for name, ref, preset, report in kz_check.pass_rows(run.passes, run.marched):
+def test_faithful_port_passes_every_pass_with_zero_failing_pixels(faithful):
+    _, passes, marched, _ = faithful
+    for name, ref, preset, report in kz_check.pass_rows(passes, marched):
         assert report.passed, (name, preset, report.checks)
         assert report.metrics["failing_pixels"] == 0, (name, report.metrics)
         assert report.metrics["compared_pixels"] > 0.5 * report.metrics["total_pixels"]
-    light = run.passes["blur_v"]
+    light = passes["blur_v"]
     assert light.mean() > 0.01 and np.all(np.isfinite(light))   # the lights are in the frame
 
 
-def test_cli_compare_on_the_exported_final(runs):
-    """The walk-through's last command, `vlref compare REF TEST --preset gpu-half`, on the port's file."""
+def test_cli_compare_on_the_exported_final(faithful):
+    """The walk-through's `vlref compare REF TEST --preset gpu-half` and `vlref verdict PORT.toml` on the port's files."""
     from vlref.cli import main
 
-    run = runs("pillars_point", "160x90")
-    final = str(run.out / "port" / "port_final.npy")
-    assert main(["compare", str(run.marched / "final.exr"), final, "--preset", "gpu-half", "-q"]) == 0
-    assert main(["compare", str(run.marched / "final.exr"), final, "--preset", "float32", "-q"]) == 1
+    _, _, marched, out = faithful
+    final = str(out / "port" / "port_final.npy")
+    assert main(["compare", str(marched / "final.exr"), final, "--preset", "gpu-half", "-q"]) == 0
+    assert main(["compare", str(marched / "final.exr"), final, "--preset", "float32", "-q"]) == 1
+    assert main(["verdict", str(out / "port" / "port.toml"), "-o", str(out / "verdict"), "-q"]) == 0
 
 
 @pytest.mark.parametrize("size", list(SIZES))
@@ -100,7 +110,8 @@ def test_variant_is_judged_as_expected_pass_by_pass(runs, device, variant, size)
         assert result.worst <= 0.5, table          # within half of every bound of every pass
     else:
         assert not result.passed, table
-        assert result.caught_by.worst >= 2.0, table   # caught by a margin, not on a knife edge
+        c = result.caught_by   # caught by a margin, not on a knife edge: failing pixels (bound 0) or 2x the mean
+        assert c.failing > 0 or c.margins.get("mean_abs_error", 0.0) >= 2.0 or "proves nothing" in c.reason, table
 
 
 @pytest.mark.parametrize("scene", ["laws", "inside_volume", "bright_behind"])

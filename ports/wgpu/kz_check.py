@@ -29,6 +29,7 @@ sys.path.insert(0, str(HERE))
 
 import kz_port  # noqa: E402
 import kz_scene  # noqa: E402
+from vlref.errors import InputError  # noqa: E402
 from kz_variants import VARIANTS  # noqa: E402
 
 SUITE = HERE.parents[1] / "data" / "conformance"
@@ -167,8 +168,12 @@ def judge_variant(run: SceneRun, variant: str, dev=None) -> VariantResult:
         port = kz_port.KillzonePort(run.port.scene, dev or (run.port.adapter, run.port.device), variant)
     passes = port.run(variant)
     manifest = kz_port.export(port, run.out / variant, str(run.path), run.overrides, passes, spec.preset)
-    v = verdict(manifest, spec.preset, run.cache)
-    return VariantResult(variant, run.name, f"{port.cam.width}x{port.cam.height}", rows_of(v))
+    size = f"{port.cam.width}x{port.cam.height}"
+    try:
+        rows = rows_of(verdict(manifest, spec.preset, run.cache))
+    except InputError as exc:   # the verdict refuses the port's files (e.g. infinite values): a failure with its reason
+        rows = [PassResult("port files", spec.preset, False, reason=str(exc))]
+    return VariantResult(variant, run.name, size, rows)
 
 
 @dataclass
@@ -182,8 +187,6 @@ class SuiteRow:
 def run_suite(dev=None, size=None, extra=(), out: Path | None = None) -> list[SuiteRow]:
     """Every conformance scene at its own size (or ``size``): the faithful port judged pass by pass, or the
     port's refusal with its reason (a scene outside its scope, or one vlref's killzone rejects)."""
-    from vlref.errors import InputError
-
     rows = []
     for name, path in SCENES.items():
         if path.parent != SUITE:

@@ -394,7 +394,7 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
 
     comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique, memo)
     comparisons.append(_camera_check(port, frame.camera))
-    comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
+    comparisons += _against_scene(port, frame, frame_p, reference, light_reaches, memo)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
                                str(Path(out_dir) / _slug(c.group) / _slug(c.name) / "report.html")
                                if out_dir is not None and c.report is not None else None) for c in comparisons)
@@ -404,8 +404,27 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     return verdict
 
 
-def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -> list[_Comparison]:
-    """The port's depth, shadow maps, shadow decisions, scene colour and final frame against the scene."""
+def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool,
+                   memo: dict | None = None) -> list[_Comparison]:
+    """The port's depth, shadow maps, shadow decisions, scene colour and final frame against the scene;
+    ``memo`` keeps what depends on the raster buffers only (all but ``end_to_end``) for the next call."""
+    memo = {} if memo is None else memo
+    if "against" not in memo:
+        memo["against"] = _raster_against_scene(port, frame, frame_p, memo)
+    out = list(memo["against"])
+    if port.final is None:
+        out.append(_Comparison("end_to_end", GROUP_SCENE, SCENE_PRESETS["end_to_end"], None,
+                               "the manifest declares no `final`: the port's frame is not judged against the scene"))
+    else:
+        out.append(_compare("end_to_end", GROUP_SCENE, reference["final"], port.final, SCENE_PRESETS["end_to_end"],
+                            None, memo["shading_zone"]("end_to_end"), light_reaches, "final",
+                            ("vlref render final", "port final")))
+    return out
+
+
+def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]:
+    """The port's depth, shadow maps, shadow decisions and scene colour against the scene; puts the
+    shading-zone function in ``memo["shading_zone"]``."""
     g = frame.gbuffer
     hit = np.isfinite(g.depth)
     points = g.position[hit]
@@ -445,21 +464,19 @@ def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -
                             (f"vlref map lookups of light {i} at the visible surface points",
                              f"port map lookups of light {i}")))
 
+    zones: dict[str, np.ndarray] = {}
+
     def shading_zone(kind):
-        k = k_of(kind)
-        zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
-        return dilate(_on_pixels(zone, hit, False) | depth_edges, k)
+        if kind not in zones:
+            k = k_of(kind)
+            zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+            zones[kind] = dilate(_on_pixels(zone, hit, False) | depth_edges, k)
+        return zones[kind]
 
     out.append(_compare("scene_colour", GROUP_SCENE, frame.scene_colour, port.colour, SCENE_PRESETS["scene_colour"],
                         None, shading_zone("scene_colour"), False,
                         "scene_colour", ("vlref scene colour", "port colour")))
-    if port.final is None:
-        out.append(_Comparison("end_to_end", GROUP_SCENE, SCENE_PRESETS["end_to_end"], None,
-                               "the manifest declares no `final`: the port's frame is not judged against the scene"))
-    else:
-        out.append(_compare("end_to_end", GROUP_SCENE, reference["final"], port.final, SCENE_PRESETS["end_to_end"],
-                            None, shading_zone("end_to_end"), light_reaches, "final",
-                            ("vlref render final", "port final")))
+    memo["shading_zone"] = shading_zone
     return out
 
 
