@@ -144,6 +144,7 @@ def _box(center, size, rot):
 def _cylinder(center, radius, height, rot, segments=48):
     a = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     ring = np.stack([radius * np.cos(a), np.zeros_like(a), radius * np.sin(a)], axis=1)
+    ring[-1] = ring[0]   # watertight seam: sin(2 pi) is -2.4e-16, not 0 (a 1-pixel crack otherwise)
     lo, hi = ring - [0, height / 2, 0], ring + [0, height / 2, 0]
     tri = []
     for i in range(segments):
@@ -157,6 +158,7 @@ def _sphere(center, radius, segments=64, rings=32):
     ph = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     p = np.stack([np.sin(th)[:, None] * np.cos(ph)[None], np.cos(th)[:, None] * np.ones_like(ph)[None],
                   np.sin(th)[:, None] * np.sin(ph)[None]], axis=-1) * radius
+    p[:, -1] = p[:, 0]   # watertight seam (see _cylinder)
     tri = []
     for i in range(rings):
         for j in range(segments):
