@@ -209,22 +209,19 @@ def _fmt(x: float) -> str:
     return "inf" if math.isinf(x) else f"{x:.3g}x"
 
 
-def print_variants(results) -> bool:
-    """The variant table; True when every variant is judged as expected."""
-    ok = True
-    print("| variant | scene | size | expected | result | caught by (first failing comparison) | there: failing "
-          "pixels, mean-error margin | worst margin (every comparison) |")
-    print("|---|---|---|---|---|---|---|---|")
-    for r in results:
-        spec = VARIANTS[r.name]
-        ok &= r.passed == (spec.expect == "pass")
-        c = r.caught_by
-        caught = f"{c.name} ({c.group}, {c.preset})" if c else "-"
-        there = (f"{c.failing} of {c.compared}, {_fmt(c.margins.get('mean_abs_error', 0.0))}" if c and c.compared
-                 else (c.reason[:60] if c else "-"))
-        print(f"| `{r.name}`: {spec.description} | {r.scene} | {r.size} | {spec.expect} | "
-              f"{'PASS' if r.passed else 'FAIL'} | {caught} | {there} | {_fmt(r.worst)} |")
-    return ok
+VARIANT_HEADER = ("| variant | scene | size | expected | result | caught by (first failing comparison) | there: "
+                  "failing pixels, mean-error margin | worst margin (every comparison) |\n|---|---|---|---|---|---|---|---|")
+
+
+def variant_row(r: VariantResult) -> str:
+    """One row of the variant table (:data:`VARIANT_HEADER`)."""
+    spec = VARIANTS[r.name]
+    c = r.caught_by
+    caught = f"{c.name} ({c.group}, {c.preset})" if c else "-"
+    there = (f"{c.failing} of {c.compared}, {_fmt(c.margins.get('mean_abs_error', 0.0))}" if c and c.compared
+             else (c.reason[:60] if c else "-"))
+    return (f"| `{r.name}`: {spec.description} | {r.scene} | {r.size} | {spec.expect} | "
+            f"{'PASS' if r.passed else 'FAIL'} | {caught} | {there} | {_fmt(r.worst)} |")
 
 
 def main(argv=None) -> int:
@@ -249,19 +246,23 @@ def main(argv=None) -> int:
         return 0 if ok else 1
     w, h = (int(v) for v in args.size.lower().split("x"))
     names = args.variants.split(",") if args.variants else list(VARIANTS)
-    results, runs = [], {}
+    runs, ok = {}, True
+    print(VARIANT_HEADER, flush=True)
     for name in names:
         scene = VARIANTS[name].scene
+        todo = [name]
         if scene not in runs:
             runs[scene] = run = scene_run(scene, (w, h), args.set, dev, out / scene)
             print(f"{scene}: {run.port.cam.width}x{run.port.cam.height} on {run.port.adapter.info['device']}",
                   file=sys.stderr)
-            if name != "faithful":   # the faithful port on every scene a variant uses
-                results.append(judge_variant(run, "faithful", dev))
-        start = time.perf_counter()
-        results.append(judge_variant(runs[scene], name, dev))
-        print(f"  {name}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
-    return 0 if print_variants(results) else 1
+            todo = ["faithful"] * (name != "faithful") + todo   # the faithful port on every scene a variant uses
+        for variant in todo:
+            start = time.perf_counter()
+            result = judge_variant(runs[scene], variant, dev)
+            ok &= result.passed == (VARIANTS[variant].expect == "pass")
+            print(variant_row(result), flush=True)
+            print(f"  {variant}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
+    return 0 if ok else 1
 
 
 if __name__ == "__main__":

@@ -14,8 +14,11 @@ export PYTHONPATH="$ROOT:/tmp/kz-site" LD_LIBRARY_PATH="$LIBS/lib:${LD_LIBRARY_P
        NUMBA_CACHE_DIR=/tmp/kz-numba PYTHONUNBUFFERED=1
 cd "$ROOT"
 python3 -c "import sys; sys.path.insert(0, 'ports/wgpu'); import kz_port; print(kz_port.device()[0].info)"
-for size in 160x90 1280x720; do
-    python3 ports/wgpu/kz_check.py --size "$size" --set render.steps=16 -o "/tmp/kz-$size" > "$OUT/variants_$size.md" \
-        2> "$OUT/variants_$size.log" || echo "kz_check $size: some variant not judged as expected" >> "$OUT/variants_$size.log"
-done
-python3 ports/wgpu/kz_check.py --suite -o /tmp/kz-suite > "$OUT/suite.md" 2> "$OUT/suite.log" || true
+check() {   # kz_check ARGS... > $OUT/NAME.md (rows as they are judged), stderr to NAME.log
+    local name=$1; shift
+    python3 ports/wgpu/kz_check.py "$@" > "$OUT/$name.md" 2> "$OUT/$name.log" \
+        || echo "kz_check $*: not everything judged as expected" >> "$OUT/$name.log"
+}
+check variants_160x90 --size 160x90 --set render.steps=16 -o /tmp/kz-160x90
+check suite --suite -o /tmp/kz-suite
+check variants_1280x720 --size 1280x720 --set render.steps=16 -o /tmp/kz-1280x720
