@@ -55,7 +55,7 @@ VARIANTS = {
                              {"BUG_SIGMA_S_FOR_T": 1}),
     "t_on_light": Variant("composite attenuates the in-scattered light too: (scene + L) T", "fail",
                           {"BUG_T_ON_LIGHT": 1}),
-    # planted bugs of issue 24: post passes, in branches pillars_point never reached
+    # planted bugs in post passes, in branches pillars_point never reached (conformance scenes)
     "shadow_planar": Variant("march: shadow-map depth taken as the radial distance (no texel-ray factor)", "fail",
                              {"BUG_SHADOW_PLANAR": 1}),
     "blur_gauss_no_two": Variant("blur: Gaussian exp(-k^2/sigma^2), the 2 of 2 sigma^2 missing", "fail",
@@ -82,7 +82,7 @@ VARIANTS = {
                                   {"HOST_CULL_BEHIND_CAMERA": 1}, scene="bright_behind"),
     "light_colour_fp16": Variant("host: march light buffer packs colour x intensity as fp16 (saturates at 65504)",
                                  "fail", {"HOST_LIGHT_COLOUR_FP16": 1}, scene="bright_behind"),
-    # planted bugs of issue 24: raster passes (judged against the scene)
+    # planted bugs in the raster passes (judged against the scene)
     "bias_sign": Variant("shadow: caster-side bias with the wrong sign (r - bias)", "fail", {"BUG_BIAS_SIGN": 1},
                          raster=True),
     "shadow_clear_near": Variant("shadow: maps cleared to 1 (near under reversed-Z) instead of 0", "fail",

@@ -2,7 +2,7 @@
 # The WebGPU port on the device machine's GPU (NVIDIA H100, Vulkan): every variant at 160x90 and 1280x720 and the
 # conformance suite, judged by `vlref verdict` (kz_check.py). Run from the project root of a copy carried to the
 # device with .whl (wgpu and the other wheels) and .device-libs (the Vulkan loader and GL dispatch library the
-# NVIDIA ICD needs: ../shared/device/README.md); tables go to $OUT (default: ./device-out).
+# NVIDIA ICD needs but the device image lacks); tables go to $OUT (default: ./device-out).
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 WHEELS="${WHEELS:-$ROOT/.whl}"
