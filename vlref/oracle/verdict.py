@@ -25,11 +25,15 @@ discontinuities of vlref's and the port's depth and, for shading, the *shadow zo
 whose map lookup lies within ``edge_pixels`` texels of a shadow silhouette of either renderer's maps
 (:func:`shadow_zone`: the lit fraction changes when each texel is replaced by the min or the max of its
 (2k+1)² neighbourhood), all grown by ``edge_pixels`` pixels. The presets of the against-the-scene
-comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``).
+comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
+take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
+texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
+reference is whichever of vlref's two decisions lies closest to the port's value.
 
-Degenerate comparisons fail: when light reaches the camera in vlref's render of the scene (its in-scatter
-is nonzero somewhere), a comparison whose reference is zero over every compared pixel proves nothing and
-fails with that reason. A port whose manifest declares no ``final`` or no ``[[passes]]`` cannot pass the
+Degenerate comparisons fail: when vlref's render of the scene says a buffer carries light (the pass's
+buffer, or for the final frame the in-scatter, is nonzero somewhere), a comparison whose reference is zero
+over every compared pixel proves nothing and fails with that reason (a black port's maps that shadow
+everything make vlref's march on its buffers black too). A port whose manifest declares no ``final`` or no ``[[passes]]`` cannot pass the
 group it is missing. Missing shadow maps of shadowed lights are bad input (:func:`vlref.port.load_port`),
 unless the manifest says ``shadows = false``: the port is then judged against the scene without shadows.
 """
@@ -52,7 +56,7 @@ from scipy import ndimage
 from ..errors import InputError
 from ..lights.pack import I_KIND
 from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, lit_at_points
-from ..port.decode import tile_points, tile_rays
+from ..port.decode import FAR_VALUE, tile_points, tile_rays
 from ..techniques import TECHNIQUES
 from .compare import Report, compare_arrays, margin
 from .edges import block_any, depth_discontinuities, dilate
@@ -195,8 +199,9 @@ def _inverse(z: np.ndarray) -> np.ndarray:
 def _port_tile_distances(tile, light, sh, encoding: str, convention: str, geometry):
     """(res, res) vlref's and the port's biased distance along each texel ray of a port ``tile``: the eye
     (perspective) or the view plane (orthographic) to the first opaque hit, plus bias (``inf`` = empty).
-    Spot and point lights: distances beyond ``range`` count as empty in both (a port's far plane is a plane,
-    vlref's range a sphere; no light reaches there)."""
+    Distances beyond the light's reach count as empty in both: for spot and point lights ``range`` (a
+    port's far plane is a plane, vlref's range a sphere; no light reaches there), for a directional
+    light's orthographic tile its far plane (``FAR_VALUE`` of the map's convention; ``d3d`` for linear)."""
     res = tile.texels.shape[0]
     origin_v, dir_v = tile_rays(tile, res)
     inv_v = np.linalg.inv(tile.view)
@@ -211,8 +216,12 @@ def _port_tile_distances(tile, light, sh, encoding: str, convention: str, geomet
     ref = cast_rays(geometry, origin + start[:, None] * d, d, start, tmax, sh.bias, sh.slope_bias)
     port = np.einsum("ij,ij->i", tile_points(tile, encoding, convention) - origin, d)
     port = np.where(np.isnan(port), np.inf, port)
-    if light.type != "directional":
-        ref, port = (np.where(a > light.range, np.inf, a) for a in (ref, port))
+    if light.type == "directional":
+        p = tile.projection
+        reach = (FAR_VALUE["d3d" if convention == "linear" else convention] - p[2, 3]) / p[2, 2]
+    else:
+        reach = light.range
+    ref, port = (np.where(a > reach, np.inf, a) for a in (ref, port))
     return ref.reshape(res, res), port.reshape(res, res)
 
 
@@ -243,7 +252,7 @@ def _judged(name: str, group: str, report: Report, silent_check: bool, buffer: s
     return _Comparison(name, group, report.tolerance.name, report, reason)
 
 
-def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, names) -> _Comparison:
+def _compare(name, group, ref, test, preset, mask, zone, signal: bool, buffer, names) -> _Comparison:
     """``compare_arrays`` of vlref's ``ref`` and the port's ``test``; a non-finite port value where vlref's is
     compared (finite) is a failing pixel (set to float32's max), not bad input."""
     tol = tolerance(preset)
@@ -252,7 +261,7 @@ def _compare(name, group, ref, test, preset, mask, zone, light_reaches, buffer, 
     compared = np.ones(t.shape[:2], bool) if mask is None else mask
     t = np.where(~np.isfinite(t) & compared[:, :, None], float(np.finfo(np.float32).max), t)
     report = compare_arrays(ref, t, tol, mask, flip=False, names=names, edges=zone)
-    return _judged(name, group, report, light_reaches, buffer)
+    return _judged(name, group, report, signal, buffer)
 
 
 def _camera_check(port, scene_camera) -> _Comparison:
@@ -286,13 +295,14 @@ def _nudged(port, frame_p, sign: int):
     return scene, dataclasses.replace(frame_p, scene=scene, lights=pack_lights(scene), shadow_cache=cache)
 
 
-def knife_edges(port, frame_p, technique) -> dict[str, np.ndarray]:
-    """Per float image buffer of the technique, (h, w) bool: its knife-edge pixels, whose value jumps when the
-    lights move by ``KNIFE_EDGE`` (relative) and the map distances scale by ``1 ± KNIFE_EDGE``: a march
-    sample there lies on a discrete decision (a shadow-volume boundary, a shadow-map texel boundary, a
-    light cone's surface), which a float32 port may take the other way. A jump is a change of more than
-    ``KNIFE_JUMP · (|value| + mean |value|)`` in a channel (continuous changes are ~KNIFE_EDGE). Downstream
-    passes (upsample, blur, composite) carry the jump, so each buffer's own pixels are marked."""
+def knife_edges(port, frame_p, technique) -> dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """Per float image buffer of the technique: ``(jump, lo, hi)``, the (h, w) bool knife-edge pixels and the
+    buffer rendered with the lights moved by ``∓KNIFE_EDGE`` (relative) and the map distances scaled by
+    ``1 ∓ KNIFE_EDGE``. A jump pixel's march sample lies on a discrete decision (a shadow-volume boundary, a
+    shadow-map texel boundary, a light cone's surface) that a float32 port may take either way: its value
+    changes by more than ``KNIFE_JUMP · (|value| + mean |value|)`` in a channel (continuous changes are
+    ~KNIFE_EDGE). Downstream passes (upsample, blur, composite) carry the jump, so each buffer's own pixels
+    are marked; ``lo`` and ``hi`` are the two decisions (``(h, w, C)``)."""
     lo = technique.render(*_nudged(port, frame_p, -1))
     hi = technique.render(*_nudged(port, frame_p, 1))
     out = {}
@@ -305,14 +315,28 @@ def knife_edges(port, frame_p, technique) -> dict[str, np.ndarray]:
         level = float(np.mean(np.abs(a[finite]))) if finite.any() else 0.0
         fa, fb = np.where(finite, a, 0.0), np.where(finite, b, 0.0)
         jump = np.where(finite, np.abs(fb - fa) > KNIFE_JUMP * (np.abs(fa) + level), a != b)
-        out[name] = jump.any(axis=2)
+        out[name] = (jump.any(axis=2), a, b)
     return out
 
 
-def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, technique,
+def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
+    """``ref`` with each knife-edge pixel replaced by whichever of vlref's decisions (``ref``, ``lo``, ``hi``)
+    lies closest to the port's value (largest channel difference): a knife-edge decision may go either way."""
+    jump, lo, hi = knife
+    options = np.stack([ref, lo, hi])
+    with np.errstate(invalid="ignore"):
+        dist = np.nan_to_num(np.abs(options - test[None]), nan=np.inf).max(axis=3)
+    pick = np.argmin(dist, axis=0)
+    chosen = np.take_along_axis(options, pick[None, :, :, None], axis=0)[0]
+    return np.where(jump[:, :, None], chosen, ref)
+
+
+def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique,
                 memo: dict | None = None) -> list[_Comparison]:
-    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers; ``memo`` keeps the knife-edge
-    pixels and edge zones of these buffers for the next call (:func:`judge`'s cache)."""
+    """The ``[[passes]]`` against ``vlref march`` on the port's own buffers. A pass whose buffer carries a
+    signal in vlref's render of the scene (``reference``: nonzero somewhere) but is zero over every compared
+    pixel of the march on the port's buffers fails as degenerate. ``memo`` keeps the knife-edge pixels and
+    edge zones of these buffers for the next call (:func:`judge`'s cache)."""
     if not port.passes:
         return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
                                                            "march and post passes are not judged")]
@@ -338,10 +362,13 @@ def _own_passes(port, frame_p, own: dict, preset: str, light_reaches: bool, tech
         ref = ref[:, :, None] if ref.ndim == 2 else ref
         fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
-        if zone is not None and p.buffer in knife and tol.edge_pixels > 0:
-            zone = zone | knife[p.buffer]
+        if p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2] and p.image.shape == ref.shape:
+            ref = _either_decision(ref, p.image, knife[p.buffer])
+            if zone is not None and tol.edge_pixels > 0:
+                zone = zone | knife[p.buffer][0]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
-        out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, light_reaches, p.buffer,
+        signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
+        out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
                             (f"vlref march {p.buffer}", p.path)))
     return out
 
@@ -392,7 +419,7 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
         cache[key] = frame_p, technique.render(port.scene, frame_p), {}
     frame_p, own, memo = cache[key]
 
-    comparisons = _own_passes(port, frame_p, own, own_preset, light_reaches, technique, memo)
+    comparisons = _own_passes(port, frame_p, own, own_preset, reference, technique, memo)
     comparisons.append(_camera_check(port, frame.camera))
     comparisons += _against_scene(port, frame, frame_p, reference, light_reaches, memo)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
