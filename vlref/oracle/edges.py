@@ -9,12 +9,12 @@ texel). :mod:`vlref.oracle.compare` applies its looser per-pixel tolerance (``ed
 
 The zone is a width in pixels (``edge_pixels`` = k) around geometric features, so its share of the
 image falls as ``1/resolution`` (a silhouette's length grows as W, the image's area as W²): the
-allowance does not grow with the image, unlike a failing-pixel fraction.
+allowance does not grow with the image, unlike a failing-pixel fraction. The shadow zone is a width in
+the *light's* texels, so its share of the image is set by the map's resolution and stays constant as the
+image grows; it does not grow either.
 
 * :func:`depth_discontinuities`: pixels where inverse depth (affine over a plane in screen space) bends
   by more than ``DEPTH_JUMP`` of itself between neighbours: silhouettes, creases, sky next to a surface;
-* :func:`changes`: pixels whose value differs from a 4-neighbour (a visibility image's shadow
-  silhouettes);
 * :func:`dilate`: grown by k pixels in the chessboard metric (a (2k+1)² square);
 * :func:`block_any`: a full-resolution zone carried to a lower-resolution buffer (a texel is in the
   zone when any pixel of its block is).
@@ -27,27 +27,12 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-__all__ = ["DEPTH_JUMP", "depth_discontinuities", "changes", "dilate", "edge_zone", "block_any"]
+__all__ = ["DEPTH_JUMP", "depth_discontinuities", "dilate", "edge_zone", "block_any"]
 
 DEPTH_JUMP = 0.05
 """Second difference of inverse depth, relative to the local inverse depth, that counts as a
 discontinuity (:func:`depth_discontinuities`); zero on planes, ~``(pixel footprint / radius)²`` on a curved
 surface, of order 1 at a silhouette."""
-
-
-def _pairs(a: np.ndarray, differ) -> np.ndarray:
-    """(H, W) bool: both pixels of every horizontal or vertical neighbour pair where ``differ(p, q)``."""
-    out = np.zeros(a.shape[:2], bool)
-    for axis in (0, 1):
-        p = np.take(a, range(a.shape[axis] - 1), axis=axis)
-        q = np.take(a, range(1, a.shape[axis]), axis=axis)
-        d = differ(p, q)
-        lo = [slice(None)] * 2
-        hi = [slice(None)] * 2
-        lo[axis], hi[axis] = slice(0, -1), slice(1, None)
-        out[tuple(lo)] |= d
-        out[tuple(hi)] |= d
-    return out
 
 
 def depth_discontinuities(depth: np.ndarray, jump: float = DEPTH_JUMP) -> np.ndarray:
@@ -74,13 +59,6 @@ def depth_discontinuities(depth: np.ndarray, jump: float = DEPTH_JUMP) -> np.nda
     return out
 
 
-def changes(image: np.ndarray) -> np.ndarray:
-    """(H, W) bool: pixels whose value differs from a 4-neighbour's in any channel."""
-    a = np.asarray(image, dtype=np.float64)
-    a = a[:, :, None] if a.ndim == 2 else a
-    return _pairs(a, lambda p, q: np.any(p != q, axis=-1))
-
-
 def dilate(mask: np.ndarray, k: int) -> np.ndarray:
     """``mask`` grown by ``k`` pixels (chessboard distance <= k)."""
     m = np.asarray(mask, dtype=bool)
@@ -91,7 +69,8 @@ def dilate(mask: np.ndarray, k: int) -> np.ndarray:
 
 def edge_zone(k: int, depths=(), features=()) -> np.ndarray:
     """The edge zone: depth discontinuities of every image in ``depths`` and the ``features`` (bool
-    masks of other silhouettes) together, dilated by ``k`` pixels. Needs at least one input."""
+    masks of other silhouettes, e.g. :func:`vlref.oracle.verdict.shadow_zone` on the image) together, dilated
+    by ``k`` pixels. Needs at least one input."""
     masks = [depth_discontinuities(z) for z in depths] + [np.asarray(f, dtype=bool) for f in features]
     if not masks:
         raise ValueError("edge_zone needs a depth image or a feature mask")

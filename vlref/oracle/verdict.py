@@ -59,7 +59,7 @@ from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, 
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
 from ..techniques import TECHNIQUES
 from .compare import Report, compare_arrays, margin
-from .edges import block_any, depth_discontinuities, dilate
+from .edges import block_any, depth_discontinuities, dilate, edge_zone
 from .presets import tolerance
 
 __all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict", "judge",
@@ -357,7 +357,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         tol = tolerance(name_preset)
         if tol.edge_pixels not in zones:
             surface = _on_pixels(shadow_zone(frame_p.shadow_maps(), frame_p.lights, points, tol.edge_pixels), hit, False)
-            zones[tol.edge_pixels] = dilate(depth_discontinuities(port.depth) | surface, tol.edge_pixels)
+            zones[tol.edge_pixels] = edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
         ref = np.asarray(own[p.buffer], dtype=np.float64)
         ref = ref[:, :, None] if ref.ndim == 2 else ref
         fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
@@ -477,7 +477,7 @@ def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]
             r, p = _port_tile_distances(tile, light, sh, m.encoding, m.convention, frame.geometry)
             ref_tiles.append(r)
             port_tiles.append(p)
-            zones.append(dilate(depth_discontinuities(r) | depth_discontinuities(p), k))
+            zones.append(edge_zone(k, depths=[r, p]))
         out.append(_compare(f"shadow_map[light={i}]", GROUP_SCENE, _inverse(np.hstack(ref_tiles)),
                             _inverse(np.hstack(port_tiles)), SCENE_PRESETS["shadow_map"], None, np.hstack(zones),
                             False, f"shadow map of light {i}",
