@@ -15,8 +15,9 @@ A port passes only when two judgments pass:
                           rays (its light matrices, :func:`vlref.port.decode.tile_rays`): the biased distance
                           along the ray (:func:`vlref.lights.shadowmaps.cast_rays`), as inverse distance
                           (empty = 0);
-  ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points against
-                          vlref's maps' (the decision a map implies where the camera looks);
+  ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points the light
+                          reaches (inside its range and cone) against vlref's maps' (the decision a map
+                          implies where the camera looks and where it matters);
   ``scene_colour``        its lit scene colour against vlref's shading (:mod:`vlref.lights.shading`);
   ``end_to_end``          its final frame against ``vlref render`` of the scene.
 
@@ -77,6 +78,10 @@ KNIFE_EDGE = 1e-5
 :func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
+MAP_JUMP = 5e-3
+""":func:`~vlref.oracle.edges.depth_discontinuities` threshold on shadow maps: a slope-scaled bias jumps where
+two flat casters meet (``slope_bias`` times the change of the slope, a few cm at metres: ~1e-3 relative),
+so a crease of a biased map is an edge though far below the camera depth's ``DEPTH_JUMP``."""
 CAMERA_TOL = 1e-4
 """Largest accepted difference of the port's camera from the scene's: position (metres, relative to
 ``1 + |position|``), rotation matrix entries, and fov (degrees); float32 matrices round at ~1e-7."""
@@ -162,6 +167,22 @@ def _filtered(maps: ShadowMaps, light: int, k: int, extreme) -> ShadowMaps:
             tile = data[start:start + count].reshape(res, res)
             data[start:start + count] = extreme(tile, size=2 * k + 1, mode="nearest").ravel()
     return ShadowMaps(maps.ints, maps.floats, data, maps.tint, maps.names)
+
+
+def _inside_volume(light, points: np.ndarray) -> np.ndarray:
+    """(N,) bool: ``points`` a point or spot light can reach (closer than ``range``, inside the cone of full
+    angle ``spot_angle``): every attenuation law is 0 at the range and every cone law 0 outside the cone, so
+    elsewhere a shadow decision changes nothing. Directional lights reach every point."""
+    if light.type == "directional":
+        return np.ones(len(points), bool)
+    w = np.asarray(points, dtype=np.float64) - np.asarray(light.position, dtype=np.float64)
+    r = np.linalg.norm(w, axis=1)
+    inside = r < light.range
+    if light.type == "spot":
+        axis = np.asarray(light.direction, dtype=np.float64)
+        axis = axis / np.linalg.norm(axis)
+        inside &= w @ axis > math.cos(math.radians(light.spot_angle) / 2.0) * r
+    return inside
 
 
 def _mapped(maps: ShadowMaps, light: int) -> bool:
@@ -477,16 +498,20 @@ def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]
             r, p = _port_tile_distances(tile, light, sh, m.encoding, m.convention, frame.geometry)
             ref_tiles.append(r)
             port_tiles.append(p)
-            zones.append(edge_zone(k, depths=[r, p]))
+            zones.append(dilate(depth_discontinuities(r, MAP_JUMP) | depth_discontinuities(p, MAP_JUMP), k))
         out.append(_compare(f"shadow_map[light={i}]", GROUP_SCENE, _inverse(np.hstack(ref_tiles)),
                             _inverse(np.hstack(port_tiles)), SCENE_PRESETS["shadow_map"], None, np.hstack(zones),
                             False, f"shadow map of light {i}",
                             (f"vlref map of light {i} through the port's texel rays", f"port map of light {i}")))
         k = k_of("shadow_test")
         zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+        reached = _on_pixels(_inside_volume(light, points), hit, False)
+        if not reached.any():   # the light reaches no visible surface: no decision of its maps shows
+            continue
         out.append(_compare(f"shadow_test[light={i}]", GROUP_SCENE,
                             _on_pixels(_lit(maps_ref, packed, i, points), hit),
-                            _on_pixels(_lit(maps_port, packed, i, points), hit), SCENE_PRESETS["shadow_test"], hit,
+                            _on_pixels(_lit(maps_port, packed, i, points), hit), SCENE_PRESETS["shadow_test"],
+                            reached,
                             dilate(_on_pixels(zone, hit, False) | depth_edges, k), False, f"lit fraction of light {i}",
                             (f"vlref map lookups of light {i} at the visible surface points",
                              f"port map lookups of light {i}")))
