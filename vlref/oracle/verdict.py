@@ -169,6 +169,30 @@ def _filtered(maps: ShadowMaps, light: int, k: int, extreme) -> ShadowMaps:
     return ShadowMaps(maps.ints, maps.floats, data, maps.tint, maps.names)
 
 
+CREASE_COS = math.cos(math.radians(10.0))
+"""Neighbouring pixels whose vlref normals differ by more than 10 degrees lie on a crease (:func:`_creases`)."""
+
+
+def _creases(normal: np.ndarray, hit: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the pixels on both sides of a crease of vlref's surface normals (a box's edge, a cylinder
+    meeting its cap): there a rasteriser and a ray cast may take either face, so the shading may be either
+    face's, though the depth is continuous."""
+    n = np.where(hit[..., None], np.asarray(normal, dtype=np.float64), 0.0)
+    out = np.zeros(hit.shape, bool)
+    for axis in (0, 1):
+        a = np.take(n, range(n.shape[axis] - 1), axis=axis)
+        b = np.take(n, range(1, n.shape[axis]), axis=axis)
+        ha = np.take(hit, range(hit.shape[axis] - 1), axis=axis)
+        hb = np.take(hit, range(1, hit.shape[axis]), axis=axis)
+        bend = ha & hb & (np.sum(a * b, axis=-1) < CREASE_COS)
+        index = [slice(None)] * 2
+        index[axis] = slice(0, hit.shape[axis] - 1)
+        out[tuple(index)] |= bend
+        index[axis] = slice(1, hit.shape[axis])
+        out[tuple(index)] |= bend
+    return out
+
+
 def _inside_volume(light, points: np.ndarray) -> np.ndarray:
     """(N,) bool: ``points`` a point or spot light can reach (closer than ``range``, inside the cone of full
     angle ``spot_angle``): every attenuation law is 0 at the range and every cone law 0 outside the cone, so
@@ -483,7 +507,7 @@ def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]
     def k_of(kind):
         return tolerance(SCENE_PRESETS[kind]).edge_pixels
 
-    depth_edges = depth_discontinuities(g.depth) | depth_discontinuities(port.depth)
+    depth_edges = depth_discontinuities(g.depth) | depth_discontinuities(port.depth) | _creases(g.normal, hit)
     # the depth comparison's own zone finds every step it could fail on: a contact edge (a cylinder's foot on
     # the ground) steps 1/z by ~4 %, under DEPTH_JUMP but over raster-depth's tolerance
     jump = tolerance(SCENE_PRESETS["depth"]).rel_tol / 2.0
