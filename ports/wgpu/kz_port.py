@@ -233,7 +233,7 @@ class KillzonePort:
         """Passes 1-3 (run by the constructor; again to time them warm)."""
         wgpu, cam = self.wgpu, self.cam
         W, H = cam.width, cam.height
-        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)
+        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=2.0 * cam.far)   # covers the far plane
         vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
         layout = {"array_stride": 36, "step_mode": "vertex", "attributes": [
             {"format": "float32x3", "offset": 0, "shader_location": 0},
