@@ -1,19 +1,25 @@
-"""Check the WebGPU killzone port against vlref: every pass, every variant; prints the README's tables.
+"""Check the WebGPU killzone port against vlref: every variant, pass by pass, and the conformance suite.
 
-    python ports/wgpu/kz_check.py [--size 160x90] [--set K=V ...] [-o DIR]
+    python ports/wgpu/kz_check.py [--size 160x90] [--set K=V ...] [--variants a,b] [--suite] [-o DIR]
 
-Steps (the walk-through of docs/PORTING.md, in-process): render the port's faithful variant and export its
-buffers (:func:`kz_port.export`), run ``vlref march PORT.toml --stages`` on them, compare each pass's
-output with the matching vlref stage under its preset (:data:`PASSES`), then re-run the post passes of
-every variant (:mod:`kz_variants`) and compare its ``final`` with vlref's.
+Per variant (:mod:`kz_variants`) on its scene (:data:`SCENES`) at the size asked: the port renders (a raster
+variant re-renders passes 1-3 with its switches; the others re-run passes 4-9 on the faithful raster buffers),
+exports its buffers, pass outputs and final frame (:func:`kz_port.export`, docs/PORTING.md), and
+``vlref verdict`` judges it (:func:`vlref.oracle.verdict.judge`): every pass against ``vlref march`` on the
+port's own buffers, and its depth, shadow maps, scene colour and final frame against the scene. The tables
+name the first failing comparison of each variant and its margins (value / bound of each check; a failing
+pixel over a bound of 0 is ``inf``). ``--suite`` runs every scene of data/conformance the port's scope covers,
+at its own size, and lists the refusals with their reasons.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
 import time
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -23,22 +29,25 @@ sys.path.insert(0, str(HERE))
 
 import kz_port  # noqa: E402
 import kz_scene  # noqa: E402
+from vlref.errors import InputError  # noqa: E402
 from kz_variants import VARIANTS  # noqa: E402
 
-SCENE = HERE / "scenes" / "pillars_point.toml"
+SUITE = HERE.parents[1] / "data" / "conformance"
+SCENES = {"pillars_point": HERE / "scenes" / "pillars_point.toml",
+          **{p.stem: p for p in sorted(SUITE.glob("*.toml"))}}
+"""The scenes variants name (``Variant.scene``): the port's own and the conformance suite's."""
+SCENE = SCENES["pillars_point"]
 
-PASSES = (("depth_lo", "depth_half", "float32"), ("march", "march_half", "gpu-half"),
-          ("upsample", "upsample", "gpu-half"), ("blur_h", "blur_h", "gpu-half"), ("blur_v", "blur_v", "gpu-half"),
-          ("transmittance", "transmittance", "gpu-half"), ("final", "final", "gpu-half"))
-"""(port output, vlref ``--stages`` buffer, preset). The march runs at half resolution and the light
-buffers are fp16: ``gpu-half``. The min-depth downsample is exact up to float32 decoding: ``float32``
-(sky pixels, ``inf`` in both, are left out with ``--ignore-sky ref``)."""
+PASSES = kz_port.PASSES
 
 
-OWN_BUFFERS = {"max_fail_fraction": 1e-3}
-"""``--set`` for a comparison with ``vlref march`` on the port's own buffers at large sizes: no rasteriser
-silhouettes are left to absorb, so the failing-fraction allowance of ``gpu-half`` (2 %, sized for edges of
-64x36 frames) can shrink to ``float32``'s 0.1 % (docs/PORTING.md)."""
+def size_overrides(scene_path, width: int, height: int) -> list[str]:
+    """``render.width/height`` near ``width x height`` keeping the parity of the scene's own size, so that
+    a scene written at an odd size (the downsample's partial last block) stays odd: 160x90 -> 161x91."""
+    own = kz_scene.load(str(scene_path)).render
+    w = width + (own.width % 2 != width % 2)
+    h = height + (own.height % 2 != height % 2)
+    return [f"render.width={w}", f"render.height={h}"]
 
 
 def compare(ref_path: Path, test, preset: str, ignore_sky: bool = False, overrides=None):
@@ -54,70 +63,205 @@ def compare(ref_path: Path, test, preset: str, ignore_sky: bool = False, overrid
     return compare_arrays(ref, test, tolerance(preset, overrides), mask, flip=False)
 
 
-def margins(report) -> tuple[float, float]:
-    """(failing fraction / its bound, mean error / its bound)."""
-    frac, mean = report.checks[0], report.checks[1]
-    return frac.value / frac.bound, mean.value / mean.bound
+@dataclass
+class PassResult:
+    """One pass of one variant: its verdict, each check's margin (value / bound), and why it failed."""
+
+    name: str
+    preset: str
+    passed: bool
+    margins: dict = field(default_factory=dict)
+    failing: int = 0
+    compared: int = 0
+    group: str = "own buffers"
+    reason: str = ""
+
+    @property
+    def worst(self) -> float:
+        return max(self.margins.values(), default=0.0 if self.passed else math.inf)
 
 
-def render_and_march(out_dir: Path, overrides=(), dev=None):
+@dataclass
+class VariantResult:
+    name: str
+    scene: str
+    size: str
+    passes: list
+
+    @property
+    def passed(self) -> bool:
+        return all(p.passed for p in self.passes)
+
+    @property
+    def caught_by(self):
+        """The first failing pass in pipeline order (None when every pass passes)."""
+        return next((p for p in self.passes if not p.passed), None)
+
+    @property
+    def worst(self) -> float:
+        """The largest margin over every pass and check."""
+        return max((p.worst for p in self.passes), default=math.inf)
+
+
+def pass_rows(passes: dict, marched: Path):
+    """``[(port pass, vlref buffer, preset, report)]`` of a faithful port against a ``vlref march --stages``
+    folder (the walk-through's ``vlref compare`` commands, one per pass)."""
+    return [(p, r, preset or "gpu-half", compare(marched / f"{r}.exr", passes[p], preset or "gpu-half",
+                                                 ignore_sky=(p == "depth_lo")))
+            for p, r, preset in PASSES]
+
+
+def render_and_march(out_dir: Path, overrides=(), dev=None, scene_path=SCENE):
     """The faithful port rendered and exported to ``out_dir/port``, vlref marched into ``out_dir/marched``:
     ``(port, passes, marched_dir, seconds of vlref march)``."""
     from vlref.cli import main
 
-    scene = kz_scene.load(str(SCENE), overrides)
+    scene = kz_scene.load(str(scene_path), overrides)
     port = kz_port.KillzonePort(scene, dev)
     passes = port.run("faithful")
-    manifest = kz_port.export(port, out_dir / "port", str(SCENE), overrides, passes)
+    manifest = kz_port.export(port, out_dir / "port", str(scene_path), overrides, passes)
     start = time.perf_counter()
     if main(["march", str(manifest), "-o", str(out_dir / "marched"), "--stages", "-q"]) != 0:
         raise RuntimeError("vlref march failed on the port's buffers")
     return port, passes, out_dir / "marched", time.perf_counter() - start
 
 
-def pass_rows(passes: dict, marched: Path):
-    """``[(port pass, vlref buffer, preset, report)]`` for :data:`PASSES`."""
-    return [(p, r, preset, compare(marched / f"{r}.exr", passes[p], preset, ignore_sky=(p == "depth_lo")))
-            for p, r, preset in PASSES]
+def verdict(manifest: Path, preset: str, cache: dict | None):
+    """:func:`vlref.oracle.verdict.judge` of a port manifest, sharing ``cache`` between a scene's variants."""
+    from vlref.oracle.verdict import judge
+
+    return judge(manifest, preset=preset, cache=cache)
+
+
+def rows_of(v) -> list[PassResult]:
+    """A verdict's comparisons as :class:`PassResult` rows, in the verdict's order (own buffers first)."""
+    return [PassResult(p.name, p.preset, p.passed, p.metrics.get("margins", {}), p.metrics.get("failing_pixels", 0),
+                       p.metrics.get("compared_pixels", 0), p.group, p.reason) for p in v.passes]
+
+
+@dataclass
+class SceneRun:
+    """One scene at one size on one device: the faithful port (its raster passes shared by the post-pass
+    variants) and the verdict's cache."""
+
+    name: str
+    path: Path
+    overrides: list
+    port: object
+    out: Path
+    cache: dict = field(default_factory=dict)
+
+
+def scene_run(name: str, size, extra=(), dev=None, out: Path | None = None) -> SceneRun:
+    path = SCENES[name]
+    overrides = (size_overrides(path, *size) if size else []) + list(extra)
+    out = Path(out or tempfile.mkdtemp(prefix=f"kz-{name}-"))
+    port = kz_port.KillzonePort(kz_scene.load(str(path), overrides), dev)
+    return SceneRun(name, path, overrides, port, out)
+
+
+def judge_variant(run: SceneRun, variant: str, dev=None) -> VariantResult:
+    """The verdict on ``variant`` on ``run``'s scene (module docstring), comparison by comparison."""
+    spec = VARIANTS[variant]
+    port = run.port
+    if spec.raster:
+        port = kz_port.KillzonePort(run.port.scene, dev or (run.port.adapter, run.port.device), variant)
+    passes = port.run(variant)
+    manifest = kz_port.export(port, run.out / variant, str(run.path), run.overrides, passes, spec.preset)
+    size = f"{port.cam.width}x{port.cam.height}"
+    try:
+        rows = rows_of(verdict(manifest, spec.preset, run.cache))
+    except InputError as exc:   # the verdict refuses the port's files (e.g. infinite values): a failure with its reason
+        rows = [PassResult("port files", spec.preset, False, reason=str(exc))]
+    return VariantResult(variant, run.name, size, rows)
+
+
+@dataclass
+class SuiteRow:
+    scene: str
+    size: str
+    refused: str           # the port's reason, "" when it ran
+    passes: list
+
+
+def run_suite(dev=None, size=None, extra=(), out: Path | None = None) -> list[SuiteRow]:
+    """Every conformance scene at its own size (or ``size``): the faithful port judged pass by pass, or the
+    port's refusal with its reason (a scene outside its scope, or one vlref's killzone rejects)."""
+    rows = []
+    for name, path in SCENES.items():
+        if path.parent != SUITE:
+            continue
+        overrides = ['render.technique="killzone"'] + (size_overrides(path, *size) if size else []) + list(extra)
+        try:
+            scene = kz_scene.load(str(path), overrides)
+            port = kz_port.KillzonePort(scene, dev)
+        except (ValueError, InputError) as exc:
+            rows.append(SuiteRow(name, "", str(exc), []))
+            continue
+        target = Path(out or tempfile.mkdtemp(prefix="kz-suite-")) / name
+        manifest = kz_port.export(port, target, str(path), overrides, port.run("faithful"))
+        v = verdict(manifest, "gpu-half", None)
+        rows.append(SuiteRow(name, f"{port.cam.width}x{port.cam.height}", "", rows_of(v)))
+    return rows
+
+
+def _fmt(x: float) -> str:
+    return "inf" if math.isinf(x) else f"{x:.3g}x"
+
+
+VARIANT_HEADER = ("| variant | scene | size | expected | result | caught by (first failing comparison) | there: "
+                  "failing pixels, mean-error margin | worst margin (every comparison) |\n|---|---|---|---|---|---|---|---|")
+
+
+def variant_row(r: VariantResult) -> str:
+    """One row of the variant table (:data:`VARIANT_HEADER`)."""
+    spec = VARIANTS[r.name]
+    c = r.caught_by
+    caught = f"{c.name} ({c.group}, {c.preset})" if c else "-"
+    there = (f"{c.failing} of {c.compared}, {_fmt(c.margins.get('mean_abs_error', 0.0))}" if c and c.compared
+             else (c.reason[:60] if c else "-"))
+    return (f"| `{r.name}`: {spec.description} | {r.scene} | {r.size} | {spec.expect} | "
+            f"{'PASS' if r.passed else 'FAIL'} | {caught} | {there} | {_fmt(r.worst)} |")
 
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--size", default="160x90")
     ap.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE")
+    ap.add_argument("--variants", default=None, help="comma-separated variant names (default: all)")
+    ap.add_argument("--suite", action="store_true", help="run the conformance suite instead of the variants")
     ap.add_argument("-o", "--output", default=None, help="keep the port and vlref buffers here")
     args = ap.parse_args(argv)
-    w, h = args.size.lower().split("x")
-    overrides = [f"render.width={int(w)}", f"render.height={int(h)}", *args.set]
     out = Path(args.output or tempfile.mkdtemp(prefix="kz-check-"))
-    port, passes, marched, t_march = render_and_march(out, overrides)
-    first = dict(port.timings)
-    port.timings.clear()
-    port.render_scene()
-    port.run("faithful")
-    print(f"device: {port.adapter.info['device']}; {w}x{h}; vlref march {t_march:.2f} s; buffers in {out}\n")
-    print("| pass | first run (ms) | warm (ms) |\n|---|---|---|")
-    for name, t in port.timings.items():
-        print(f"| {name} | {1e3 * first[name]:.1f} | {1e3 * t:.1f} |")
-    print(f"| total | {1e3 * sum(first.values()):.1f} | {1e3 * sum(port.timings.values()):.1f} |")
-    print("\n| port pass | vlref buffer | preset | result | failing pixels | failing fraction | mean error |")
-    print("|---|---|---|---|---|---|---|")
-    ok = True
-    for p, r, preset, rep in pass_rows(passes, marched):
-        f, m = margins(rep)
-        ok &= rep.passed
-        print(f"| {p} | {r} | {preset} | {'PASS' if rep.passed else 'FAIL'} | "
-              f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {f:.3f}x | {m:.3f}x |")
-    print("\n| variant | preset | expected | result (final) | failing fraction | mean error "
-          "| with `--set max_fail_fraction=1e-3` |\n|---|---|---|---|---|---|---|")
-    for name, v in VARIANTS.items():
-        final = port.run(name)["final"]
-        rep = compare(marched / "final.exr", final, v.preset)
-        tight = compare(marched / "final.exr", final, v.preset, overrides=OWN_BUFFERS)
-        f, m = margins(rep)
-        ok &= rep.passed == (v.expect == "pass")
-        print(f"| `{name}`: {v.description} | {v.preset} | {v.expect} | {'PASS' if rep.passed else 'FAIL'} | "
-              f"{f:.3g}x | {m:.3g}x | {'PASS' if tight.passed else 'FAIL'} ({margins(tight)[0]:.3g}x) |")
+    dev = kz_port.device()
+    if args.suite:
+        ok = True
+        print("| scene | size | result | worst margin | refused because |\n|---|---|---|---|---|")
+        for row in run_suite(dev, extra=args.set, out=out):
+            passed = all(p.passed for p in row.passes)
+            ok &= passed
+            worst = max((p.worst for p in row.passes), default=0.0)
+            print(f"| {row.scene} | {row.size or '-'} | {'refused' if row.refused else 'PASS' if passed else 'FAIL'} "
+                  f"| {_fmt(worst) if row.passes else '-'} | {row.refused} |")
+        return 0 if ok else 1
+    w, h = (int(v) for v in args.size.lower().split("x"))
+    names = args.variants.split(",") if args.variants else list(VARIANTS)
+    runs, ok = {}, True
+    print(VARIANT_HEADER, flush=True)
+    for name in names:
+        scene = VARIANTS[name].scene
+        todo = [name]
+        if scene not in runs:
+            runs[scene] = run = scene_run(scene, (w, h), args.set, dev, out / scene)
+            print(f"{scene}: {run.port.cam.width}x{run.port.cam.height} on {run.port.adapter.info['device']}",
+                  file=sys.stderr)
+            todo = ["faithful"] * (name != "faithful") + todo   # the faithful port on every scene a variant uses
+        for variant in todo:
+            start = time.perf_counter()
+            result = judge_variant(runs[scene], variant, dev)
+            ok &= result.passed == (VARIANTS[variant].expect == "pass")
+            print(variant_row(result), flush=True)
+            print(f"  {variant}: {time.perf_counter() - start:.1f} s", file=sys.stderr)
     return 0 if ok else 1
 
 

@@ -46,23 +46,47 @@ INCLUDES = {"gbuffer": ("common",), "shadow": (), "lighting": ("common", "lights
 RENDER_PASSES = ("gbuffer", "shadow", "lighting")
 POST_PASSES = ("downsample", "volumes", "upsample", "blur_h", "blur_v", "composite")
 RES_FACTOR = {"full": 1, "half": 2, "quarter": 4}
+PASSES = (("depth_lo", "depth_half", "float32"), ("march", "march_half", None), ("upsample", "upsample", None),
+          ("blur_h", "blur_h", None), ("blur_v", "blur_v", None), ("transmittance", "transmittance", None),
+          ("final", "final", None))
+"""(port output, the ``vlref march --stages`` buffer it reproduces, its preset): the manifest's ``[[passes]]``.
+The march runs at half resolution and the light buffers are fp16: the variant's preset (``gpu-half``; a
+float32 variant: ``float32``), None here. The min-depth downsample is exact up to float32 decoding:
+``float32``, sky texels (``inf`` in both) left out (``ignore_sky``)."""
+
+
+BACKENDS = ("Vulkan", "Metal", "D3D12")
+"""wgpu backends the port runs on. Not OpenGL: wgpu's GLSL back end cannot ``textureLoad`` a depth texture
+(pipeline creation fails: "textureLoad from depth textures is not supported in GLSL"), and the port reads
+its depth and shadow textures that way."""
 
 
 class NoAdapter(RuntimeError):
-    """No WebGPU adapter (e.g. no Vulkan driver): the port cannot run here."""
+    """No WebGPU adapter on a backend of :data:`BACKENDS` (e.g. no Vulkan driver): the port cannot run here."""
+
+
+def pick_adapter(adapters):
+    """The first adapter on a supported backend (:data:`BACKENDS`); :class:`NoAdapter` saying what exists."""
+    for adapter in adapters:
+        if adapter.info.get("backend_type") in BACKENDS:
+            return adapter
+    found = ", ".join(f"{a.info.get('device')} ({a.info.get('backend_type')})" for a in adapters) or "none"
+    raise NoAdapter(f"no WebGPU adapter on {'/'.join(BACKENDS)} (found: {found}); the port needs the Vulkan "
+                    "backend (install a Vulkan driver, e.g. Mesa's lavapipe: mesa-vulkan-drivers): wgpu's OpenGL "
+                    "backend cannot textureLoad depth textures")
 
 
 def device():
-    """A wgpu device on the first adapter, with ``float32-blendable`` when the adapter has it."""
+    """A wgpu device on the first Vulkan/Metal/D3D12 adapter (:func:`pick_adapter`), with
+    ``float32-blendable`` when the adapter has it."""
     os.environ.setdefault("XDG_RUNTIME_DIR", tempfile.mkdtemp(prefix="xdg-"))
     import wgpu
 
     try:
-        adapter = wgpu.gpu.request_adapter_sync(power_preference="high-performance")
+        adapters = wgpu.gpu.enumerate_adapters_sync()
     except Exception as exc:  # wgpu raises RuntimeError-like errors when no backend exists
         raise NoAdapter(f"no WebGPU adapter: {exc}") from exc
-    if adapter is None:
-        raise NoAdapter("no WebGPU adapter (install a Vulkan driver, e.g. mesa-vulkan-drivers)")
+    adapter = pick_adapter(sorted(adapters, key=lambda a: a.info.get("adapter_type") != "DiscreteGPU"))
     features = [f for f in ("float32-blendable",) if f in adapter.features]
     return adapter, adapter.request_device_sync(required_features=features)
 
@@ -80,15 +104,18 @@ def _constants(source: str, overrides: dict) -> dict:
 
 
 class KillzonePort:
-    """One scene on one device: raster passes at construction, post passes per variant (:meth:`run`)."""
+    """One scene on one device: raster passes at construction (with ``raster_variant``'s switches when that
+    variant is a raster one, :mod:`kz_variants`), post passes per variant (:meth:`run`)."""
 
-    def __init__(self, scene, dev=None):
+    def __init__(self, scene, dev=None, raster_variant: str = "faithful"):
         import wgpu
 
         self.wgpu = wgpu
         self.adapter, self.device = dev if dev is not None else device()
         self.scene = scene
         self._check_scene(scene)
+        spec = VARIANTS[raster_variant]
+        self.raster_overrides = spec.overrides if spec.raster else {}
         self.cam = kz_scene.camera_setup(scene)
         W, H = self.cam.width, self.cam.height
         f = RES_FACTOR[kz_scene.resolved(scene, "resolution")]
@@ -101,11 +128,12 @@ class KillzonePort:
                                                            p.blur_sigma), wgpu.BufferUsage.UNIFORM)
         self.layers, layer = [], 0
         for light in scene.lights:
-            self.layers.append(layer if light.shadows else -1)
-            layer += {"spot": 1, "point": 6}[light.type] if light.shadows else 0
-        self.lights = self._buffer(np.concatenate([kz_scene.light_block(li, la) for li, la in
-                                                   zip(scene.lights, self.layers)]), wgpu.BufferUsage.STORAGE)
-        self.shadow_res = max([li.shadows.resolution for li in scene.lights if li.shadows] + [1])
+            shadowed = light.shadows is not None and light.shadows.enabled
+            self.layers.append(layer if shadowed else -1)
+            layer += {"spot": 1, "point": 6}[light.type] if shadowed else 0
+        self.light_blocks = np.concatenate([kz_scene.light_block(li, la) for li, la in zip(scene.lights, self.layers)])
+        self.lights = self._buffer(self.light_blocks, wgpu.BufferUsage.STORAGE)
+        self.shadow_res = max([li.shadows.resolution for li, la in zip(scene.lights, self.layers) if la >= 0] + [1])
         usage = wgpu.TextureUsage
         rt = usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC
         self.depth = d.create_texture(size=(W, H, 1), format="depth32float", usage=rt)
@@ -119,24 +147,35 @@ class KillzonePort:
 
     @staticmethod
     def _check_scene(scene):
-        """What this port implements: killzone, point/spot lights without cookies, a homogeneous medium."""
+        """What this port implements: killzone, point/spot lights without cookies (every attenuation and cone
+        law, shadow strength, slope bias), a homogeneous medium; raises ValueError listing what it does not."""
         m = scene.medium
         problems = [k for k, bad in (("medium.height_fog", m.height_fog), ("medium.noise", m.noise),
                                      ("medium.bounds", m.bounds)) if bad is not None]
+        for i, obj in enumerate(scene.objects):
+            if obj.material.opacity < 1.0:
+                problems.append(f"objects.{i}.material.opacity (transparent occluders)")
+            if any(obj.material.emission):
+                problems.append(f"objects.{i}.material.emission")
         for i, li in enumerate(scene.lights):
             if li.type == "directional":
                 problems.append(f"lights.{i}.type (directional)")
             if li.cookie is not None:
                 problems.append(f"lights.{i}.cookie")
-            if li.shadows is not None and (li.shadows.filter != "hard" and scene.techniques.killzone.shadow_filter != "hard"):
-                problems.append(f"lights.{i}.shadows.filter")
+            if li.shadows is not None and li.shadows.enabled and scene.techniques.killzone.shadow_filter != "hard":
+                problems.append("techniques.killzone.shadow_filter (the port looks up one texel: hard)")
         p = scene.techniques.killzone
         if scene.render.technique != "killzone":
             problems.append("render.technique (the port is killzone)")
-        if p.light_resolutions or kz_scene.resolved(scene, "sampling") != "bayer4" or not p.transmittance \
-                or not p.blur or p.blur_radius != 3 or p.blur_depth_weight != "inverse":
-            problems.append("techniques.killzone (the port implements the defaults: bayer4, one resolution, "
-                            "transmittance, 7-tap inverse-depth blur)")
+        for name, want in (("sampling", "bayer4"), ("resolution", "half")):
+            if kz_scene.resolved(scene, name) != want:
+                problems.append(f"render.{name} = {kz_scene.resolved(scene, name)!r} (the port has {want!r} only)")
+        for name, bad in (("light_resolutions", bool(p.light_resolutions)), ("transmittance", not p.transmittance),
+                          ("blur", not p.blur), ("blur_radius", p.blur_radius != 3),
+                          ("blur_depth_weight", p.blur_depth_weight != "inverse")):
+            if bad:
+                problems.append(f"techniques.killzone.{name} = {getattr(p, name)!r} (the port implements the "
+                                "default: one resolution, view transmittance, a 7-tap inverse-depth blur)")
         if problems:
             raise ValueError("the wgpu port does not implement: " + ", ".join(problems))
 
@@ -194,15 +233,16 @@ class KillzonePort:
         """Passes 1-3 (run by the constructor; again to time them warm)."""
         wgpu, cam = self.wgpu, self.cam
         W, H = cam.width, cam.height
-        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)
+        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=2.0 * cam.far)   # covers the far plane
         vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
         layout = {"array_stride": 36, "step_mode": "vertex", "attributes": [
             {"format": "float32x3", "offset": 0, "shader_location": 0},
             {"format": "float32x3", "offset": 12, "shader_location": 1},
             {"format": "float32x3", "offset": 24, "shader_location": 2}]}
         ztest = {"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"}
-        gb = self._pipeline("gbuffer", "vs_main", "fs_main", ["rgba16float", "rgba16float"], vertex_buffers=[layout],
-                            depth=ztest)
+        ov = self.raster_overrides
+        gb = self._pipeline("gbuffer", "vs_main", "fs_main", ["rgba16float", "rgba16float"], ov,
+                            vertex_buffers=[layout], depth=ztest)
         gb_bind = self._bind(gb, 0, [self._ubuf(self.globals)])
 
         def gbuffer(enc):
@@ -219,10 +259,11 @@ class KillzonePort:
 
         self._timed("gbuffer", gbuffer)
 
-        sp = self._pipeline("shadow", "vs_main", "fs_main", [], vertex_buffers=[layout], depth=ztest)
+        sp = self._pipeline("shadow", "vs_main", "fs_main", [], ov, vertex_buffers=[layout], depth=ztest)
+        shadow_clear = 1.0 if ov.get("HOST_SHADOW_CLEAR_NEAR") else 0.0
         sp_binds, self.tiles = [], []
         for i, light in enumerate(self.scene.lights):
-            if not light.shadows:
+            if self.layers[i] < 0:
                 continue
             for k, (face, view, proj) in enumerate(kz_scene.shadow_tiles(light)):
                 sh = light.shadows
@@ -236,7 +277,8 @@ class KillzonePort:
             for layer, res, bind in sp_binds:
                 view = self.shadow.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
                 rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": 0.0, "depth_load_op": "clear", "depth_store_op": "store"})
+                    "view": view, "depth_clear_value": shadow_clear, "depth_load_op": "clear",
+                    "depth_store_op": "store"})
                 rp.set_pipeline(sp)
                 rp.set_bind_group(0, bind)
                 rp.set_viewport(0, 0, res, res, 0, 1)
@@ -246,7 +288,7 @@ class KillzonePort:
 
         self._timed("shadow", shadows)
 
-        lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"])
+        lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"], ov)
         lp_bind = self._bind(lp, 0, [self._ubuf(self.globals), self._ubuf(self.lights),
                                      self.shadow.create_view(dimension="2d-array"), self.depth.create_view(),
                                      self.normal.create_view(), self.albedo.create_view()])
@@ -258,7 +300,7 @@ class KillzonePort:
         """Run passes 4-9 with ``variant``'s switches; returns every pass's output (float32, row 0 on top)."""
         wgpu, d = self.wgpu, self.device
         spec = VARIANTS[variant]
-        ov = spec.overrides
+        ov = {} if spec.raster else spec.overrides
         fmt = spec.light_format
         W, H = self.cam.width, self.cam.height
         w, h = self.low
@@ -278,10 +320,17 @@ class KillzonePort:
         mp = self._pipeline("march", "vs_volume", "fs_march", [fmt], ov, cull="front", blend=add, vertex_buffers=[
             {"array_stride": 12, "step_mode": "vertex",
              "attributes": [{"format": "float32x3", "offset": 0, "shader_location": 0}]}])
-        mp_bind = self._bind(mp, 0, [g, self._ubuf(self.lights), self.shadow.create_view(dimension="2d-array"),
+        lights = self.lights
+        if ov.get("HOST_LIGHT_COLOUR_FP16"):   # row 2 of each Light: colour * intensity, shadow strength
+            blocks = self.light_blocks.reshape(-1, 8, 4).copy()
+            blocks[:, 2, :3] = np.clip(blocks[:, 2, :3], -65504.0, 65504.0).astype(np.float16)
+            lights = self._buffer(blocks.reshape(-1), wgpu.BufferUsage.STORAGE)
+        mp_bind = self._bind(mp, 0, [g, self._ubuf(lights), self.shadow.create_view(dimension="2d-array"),
                                      tex["depth_lo"].create_view()])
         volumes = []
         for i, light in enumerate(self.scene.lights):
+            if ov.get("HOST_CULL_BEHIND_CAMERA") and (np.asarray(light.position) - self.cam.eye) @ self.cam.frame[:, 2] < 0:
+                continue
             mesh = kz_scene.volume_mesh(light)
             idx = self._buffer(np.array([i, 0, 0, 0], dtype=np.uint32).view(np.float32), wgpu.BufferUsage.UNIFORM)
             volumes.append((self._buffer(mesh, wgpu.BufferUsage.VERTEX), len(mesh), self._bind(mp, 1, [self._ubuf(idx)])))
@@ -355,16 +404,20 @@ def _toml(v) -> str:
     return repr(float(v)) if isinstance(v, float) else str(v)
 
 
-def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: dict | None = None) -> Path:
+def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: dict | None = None,
+           preset: str = "gpu-half") -> Path:
     """Write the port's depth, colour and shadow maps (``.npy``, float32, row 0 on top) with ``port.toml``,
-    and each of ``passes`` as ``port_<name>.npy``; returns the manifest's path."""
+    and each of ``passes`` as ``port_<name>.npy``, declared in ``[[passes]]`` (:data:`PASSES`, ``preset``) with
+    ``final`` for ``vlref verdict``; returns the manifest's path."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cam = port.cam
     raster = port.raster_buffers()
+    passes = passes or {}
     np.save(out / "depth.npy", raster["depth"])
     np.save(out / "colour.npy", raster["colour"])
-    lines = [f"scene = {_toml(scene_ref)}", f"set = {_toml(list(overrides))}", 'colour = "colour.npy"', "",
+    lines = [f"scene = {_toml(scene_ref)}", f"set = {_toml(list(overrides))}", 'colour = "colour.npy"',
+             *(['final = "port_final.npy"'] if "final" in passes else []), f"preset = {_toml(preset)}", "",
              "[camera]", 'forward = "+z"', 'convention = "reversed"', f"view = {_toml(cam.view)}",
              f"projection = {_toml(cam.projection)}", "",
              "[depth]", 'path = "depth.npy"', 'encoding = "raw"', 'convention = "reversed"',
@@ -379,8 +432,12 @@ def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: di
         for face, view, proj, _ in tiles:
             lines += ["[[shadow_maps.tiles]]"] + ([f'face = "{face}"'] if face else [])
             lines += [f"view = {_toml(view)}", f"projection = {_toml(proj)}", ""]
+    for name, buffer, pass_preset in PASSES:
+        if name in passes:
+            lines += ["[[passes]]", f"name = {_toml(name)}", f"buffer = {_toml(buffer)}", f'path = "port_{name}.npy"']
+            lines += [f"preset = {_toml(pass_preset)}", "ignore_sky = true", ""] if pass_preset else [""]
     (out / "port.toml").write_text("\n".join(lines))
-    for name, a in (passes or {}).items():
+    for name, a in passes.items():
         np.save(out / f"port_{name}.npy", np.asarray(a, dtype=np.float32))
     return out / "port.toml"
 
@@ -400,10 +457,10 @@ def main(argv=None) -> int:
         overrides += [f"render.width={int(w)}", f"render.height={int(h)}"]
     scene = kz_scene.load(args.scene, overrides)
     start = time.perf_counter()
-    port = KillzonePort(scene)
+    port = KillzonePort(scene, raster_variant=args.variant)
     passes = port.run(args.variant)
     ref = args.scene if Path(args.scene).suffix != ".toml" else str(Path(args.scene).resolve())
-    path = export(port, args.output, ref, overrides, passes)
+    path = export(port, args.output, ref, overrides, passes, VARIANTS[args.variant].preset)
     total = time.perf_counter() - start
     print(f"wrote {path} ({port.adapter.info['device']}, {total:.2f} s)")
     for name, t in port.timings.items():

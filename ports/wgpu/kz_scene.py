@@ -144,6 +144,7 @@ def _box(center, size, rot):
 def _cylinder(center, radius, height, rot, segments=48):
     a = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     ring = np.stack([radius * np.cos(a), np.zeros_like(a), radius * np.sin(a)], axis=1)
+    ring[-1] = ring[0]   # watertight seam: sin(2 pi) is -2.4e-16, not 0 (a 1-pixel crack otherwise)
     lo, hi = ring - [0, height / 2, 0], ring + [0, height / 2, 0]
     tri = []
     for i in range(segments):
@@ -152,11 +153,12 @@ def _cylinder(center, radius, height, rot, segments=48):
     return np.array(tri, dtype=np.float64) @ rot.T + center
 
 
-def _sphere(center, radius, segments=32, rings=16):
+def _sphere(center, radius, segments=64, rings=32):
     th = np.linspace(0.0, math.pi, rings + 1)
     ph = np.linspace(0.0, 2.0 * math.pi, segments + 1)
     p = np.stack([np.sin(th)[:, None] * np.cos(ph)[None], np.cos(th)[:, None] * np.ones_like(ph)[None],
                   np.sin(th)[:, None] * np.sin(ph)[None]], axis=-1) * radius
+    p[:, -1] = p[:, 0]   # watertight seam (see _cylinder)
     tri = []
     for i in range(rings):
         for j in range(segments):
@@ -178,7 +180,7 @@ def _plane(point, normal, eye, half):
 def tessellate(scene, eye, plane_half: float) -> np.ndarray:
     """Triangle list ``(n, 9)`` float32: position, flat normal, albedo per vertex (world space).
 
-    Analytic primitives are tessellated (cylinders 48 segments, spheres 32x16; the infinite plane is a
+    Analytic primitives are tessellated (cylinders 48 segments, spheres 64x32; the infinite plane is a
     square of half-size ``plane_half`` centred under the camera); OBJ meshes go as they are (vlref's
     OBJ reader). Faces are wound either way: the port draws without culling.
     """
@@ -213,7 +215,9 @@ def volume_mesh(light) -> np.ndarray:
     Spot: a 24-sided cone, apex at the light, length ``range`` along the axis, its polygon
     circumscribing the circle of radius ``range · tan(θ)``: it contains ball ∩ cone. Point: an
     icosphere (2 subdivisions) scaled so that every face plane lies at least ``range`` from the centre.
-    The shader intersects the ray with the exact volume; the mesh only selects the pixels.
+    The shader intersects the ray with the exact volume; the mesh only selects the pixels. Both meshes are
+    wound alike (clockwise seen from outside, in world coordinates): the march pass culls front faces and
+    draws the far side, which a camera inside the volume sees too (data/conformance/inside_volume.toml).
     """
     pos = np.asarray(light.position, dtype=np.float64)
     if light.type == "spot":
@@ -239,6 +243,7 @@ def volume_mesh(light) -> np.ndarray:
         tri = np.concatenate([np.stack(s, axis=1) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     plane = np.abs(np.einsum("ij,ij->i", n / np.linalg.norm(n, axis=1, keepdims=True), tri[:, 0]))
+    tri = tri[:, ::-1]   # wound as the cone: inward-facing in a right-handed sense, so "back faces" are the far side
     return (tri.reshape(-1, 3) * (light.range / plane.min()) + pos).astype(np.float32)
 
 

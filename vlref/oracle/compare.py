@@ -39,7 +39,8 @@ RULE = ("pixel fails when |test-ref| > abs_tol*S + rel_tol*|ref| in any channel;
         "(and mean HDR-FLIP <= max_flip_mean when set and available); S = 1 (scale 'absolute') or "
         "mean |ref| over the compared values (scale 'mean'); values at a bound pass; in an edge zone (pixels "
         "near depth discontinuities and shadow silhouettes) a pixel fails beyond edge_abs_tol*S + "
-        "edge_rel_tol*|ref| and the mean error is taken outside the zone")
+        "edge_rel_tol*|ref| and the mean error is taken outside the zone; with max_mean_abs_all set, the mean "
+        "|test-ref| over every compared pixel, the zone included, <= max_mean_abs_all*S")
 
 
 @dataclass
@@ -186,6 +187,9 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
                     metrics["frac_failing"] <= tol.max_fail_fraction),
               Check("mean_abs_error", metrics["mean_abs_outside_edges"], mean_bound,
                     metrics["mean_abs_outside_edges"] <= mean_bound)]
+    if tol.max_mean_abs_all is not None:
+        checks.append(Check("mean_abs_all", metrics["mean_abs"], tol.max_mean_abs_all * s,
+                            metrics["mean_abs"] <= tol.max_mean_abs_all * s))
     if tol.max_flip_mean is not None:
         if fr.available:
             checks.append(Check("flip_mean", fr.mean, tol.max_flip_mean, fr.mean <= tol.max_flip_mean))
@@ -195,6 +199,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
     thresholds = {"scale": tol.scale, "S": s, "abs_threshold": abs_thr, "rel_tol": tol.rel_tol,
                   "edge_pixels": tol.edge_pixels, "edge_abs_threshold": tol.edge_abs * s, "edge_rel_tol": tol.edge_rel,
                   "max_fail_fraction": tol.max_fail_fraction, "mean_abs_bound": mean_bound,
+                  "mean_abs_all_bound": None if tol.max_mean_abs_all is None else tol.max_mean_abs_all * s,
                   "max_flip_mean": tol.max_flip_mean}
     info = {"reference": names[0], "test": names[1], **(inputs or {})}
     return Report(passed, tol, metrics, thresholds, checks, fr, info, r, t, mask, fail)

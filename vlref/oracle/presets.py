@@ -11,7 +11,9 @@ knobs), evaluated over the compared pixels:
 Edge zone (:mod:`vlref.oracle.edges`): when the caller gives one (``compare_arrays(edges=)``, built
 ``edge_pixels`` pixels wide around depth discontinuities and shadow silhouettes), its pixels fail only
 beyond ``edge_abs_tol * S + edge_rel_tol * |r_c|`` (default: the base knobs) and the mean absolute error
-is taken outside it; the presets for GPU ports allow no failing pixel (``max_fail_fraction = 0``), so
+is taken outside it (``max_mean_abs_all``, when set, bounds the mean absolute error over every compared
+pixel, the zone included, by ``max_mean_abs_all * S``: a zone that covers much of a frame cannot hide an
+error everywhere); the presets for GPU ports allow no failing pixel (``max_fail_fraction = 0``), so
 what a rasteriser may change is absorbed by geometry, not by a share of the image that grows with it.
 
 ``S`` is the scale: ``"absolute"`` -> 1, ``"mean"`` -> the mean ``|ref|`` over the compared values
@@ -54,6 +56,7 @@ class Tolerance:
     edge_pixels: int = 0
     edge_rel_tol: float | None = None
     edge_abs_tol: float | None = None
+    max_mean_abs_all: float | None = None
 
     @property
     def edge_rel(self) -> float:
@@ -67,7 +70,7 @@ class Tolerance:
 
     def __post_init__(self):
         for key in ("abs_tol", "rel_tol", "max_fail_fraction", "max_mean_abs", "max_flip_mean", "edge_rel_tol",
-                    "edge_abs_tol"):
+                    "edge_abs_tol", "max_mean_abs_all"):
             value = getattr(self, key)
             if value is None and key in _OPTIONAL:
                 continue
@@ -82,8 +85,9 @@ class Tolerance:
             raise InputError(_SOURCE, "scale", f"must be one of {', '.join(SCALES)}, got {self.scale!r}")
 
 
-_OPTIONAL = ("max_flip_mean", "edge_rel_tol", "edge_abs_tol")
-"""Knobs that may be unset (``none``): no FLIP gate; the edge zone's tolerance = the base one."""
+_OPTIONAL = ("max_flip_mean", "edge_rel_tol", "edge_abs_tol", "max_mean_abs_all")
+"""Knobs that may be unset (``none``): no FLIP gate; the edge zone's tolerance = the base one; no mean-error
+bound over the edge zone too."""
 _KNOBS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.name != "name")
 
 

@@ -15,8 +15,9 @@ A port passes only when two judgments pass:
                           rays (its light matrices, :func:`vlref.port.decode.tile_rays`): the biased distance
                           along the ray (:func:`vlref.lights.shadowmaps.cast_rays`), as inverse distance
                           (empty = 0);
-  ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points against
-                          vlref's maps' (the decision a map implies where the camera looks);
+  ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points the light
+                          reaches (inside its range and cone) against vlref's maps' (the decision a map
+                          implies where the camera looks and where it matters);
   ``scene_colour``        its lit scene colour against vlref's shading (:mod:`vlref.lights.shading`);
   ``end_to_end``          its final frame against ``vlref render`` of the scene.
 
@@ -41,6 +42,7 @@ unless the manifest says ``shadows = false``: the port is then judged against th
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import html
 import json
 import math
@@ -59,7 +61,7 @@ from ..lights.pack import I_KIND
 from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, lit_at_points
 from ..port import load_port, port_frame
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
-from ..render import prepare_frame
+from ..render import prepare_frame, scene_hash
 from ..techniques import TECHNIQUES
 from .compare import Report, compare_arrays, margin
 from .edges import block_any, depth_discontinuities, dilate, edge_zone
@@ -81,6 +83,10 @@ KNIFE_EDGE = 1e-5
 :func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
+MAP_JUMP = 5e-3
+""":func:`~vlref.oracle.edges.depth_discontinuities` threshold on shadow maps: a slope-scaled bias jumps where
+two flat casters meet (``slope_bias`` times the change of the slope, a few cm at metres: ~1e-3 relative),
+so a crease of a biased map is an edge though far below the camera depth's ``DEPTH_JUMP``."""
 CAMERA_TOL = 1e-4
 """Largest accepted difference of the port's camera from the scene's: position (metres, relative to
 ``1 + |position|``), rotation matrix entries, and fov (degrees); float32 matrices round at ~1e-7."""
@@ -166,6 +172,46 @@ def _filtered(maps: ShadowMaps, light: int, k: int, extreme) -> ShadowMaps:
             tile = data[start:start + count].reshape(res, res)
             data[start:start + count] = extreme(tile, size=2 * k + 1, mode="nearest").ravel()
     return ShadowMaps(maps.ints, maps.floats, data, maps.tint, maps.names)
+
+
+CREASE_COS = math.cos(math.radians(10.0))
+"""Neighbouring pixels whose vlref normals differ by more than 10 degrees lie on a crease (:func:`_creases`)."""
+
+
+def _creases(normal: np.ndarray, hit: np.ndarray) -> np.ndarray:
+    """(H, W) bool: the pixels on both sides of a crease of vlref's surface normals (a box's edge, a cylinder
+    meeting its cap): there a rasteriser and a ray cast may take either face, so the shading may be either
+    face's, though the depth is continuous."""
+    n = np.where(hit[..., None], np.asarray(normal, dtype=np.float64), 0.0)
+    out = np.zeros(hit.shape, bool)
+    for axis in (0, 1):
+        a = np.take(n, range(n.shape[axis] - 1), axis=axis)
+        b = np.take(n, range(1, n.shape[axis]), axis=axis)
+        ha = np.take(hit, range(hit.shape[axis] - 1), axis=axis)
+        hb = np.take(hit, range(1, hit.shape[axis]), axis=axis)
+        bend = ha & hb & (np.sum(a * b, axis=-1) < CREASE_COS)
+        index = [slice(None)] * 2
+        index[axis] = slice(0, hit.shape[axis] - 1)
+        out[tuple(index)] |= bend
+        index[axis] = slice(1, hit.shape[axis])
+        out[tuple(index)] |= bend
+    return out
+
+
+def _inside_volume(light, points: np.ndarray) -> np.ndarray:
+    """(N,) bool: ``points`` a point or spot light can reach (closer than ``range``, inside the cone of full
+    angle ``spot_angle``): every attenuation law is 0 at the range and every cone law 0 outside the cone, so
+    elsewhere a shadow decision changes nothing. Directional lights reach every point."""
+    if light.type == "directional":
+        return np.ones(len(points), bool)
+    w = np.asarray(points, dtype=np.float64) - np.asarray(light.position, dtype=np.float64)
+    r = np.linalg.norm(w, axis=1)
+    inside = r < light.range
+    if light.type == "spot":
+        axis = np.asarray(light.direction, dtype=np.float64)
+        axis = axis / np.linalg.norm(axis)
+        inside &= w @ axis > math.cos(math.radians(light.spot_angle) / 2.0) * r
+    return inside
 
 
 def _mapped(maps: ShadowMaps, light: int) -> bool:
@@ -333,17 +379,22 @@ def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     return np.where(jump[:, :, None], chosen, ref)
 
 
-def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique) -> list[_Comparison]:
+def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique,
+                memo: dict | None = None) -> list[_Comparison]:
     """The ``[[passes]]`` against ``vlref march`` on the port's own buffers. A pass whose buffer carries a
     signal in vlref's render of the scene (``reference``: nonzero somewhere) but is zero over every compared
-    pixel of the march on the port's buffers fails as degenerate."""
+    pixel of the march on the port's buffers fails as degenerate. ``memo`` keeps the knife-edge pixels and
+    edge zones of these buffers for the next call (:func:`judge`'s cache)."""
     if not port.passes:
         return [_Comparison("passes", GROUP_OWN, "-", None, "the manifest declares no [[passes]]: the port's "
                                                            "march and post passes are not judged")]
     hit = np.isfinite(port.depth)
     points = frame_p.gbuffer.position[hit]
-    zones: dict[int, np.ndarray] = {}
-    knife = knife_edges(port, frame_p, technique)
+    memo = {} if memo is None else memo
+    zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
+    if "knife" not in memo:
+        memo["knife"] = knife_edges(port, frame_p, technique)
+    knife = memo["knife"]
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -362,7 +413,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2] and p.image.shape == ref.shape:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             if zone is not None and tol.edge_pixels > 0:
-                zone |= knife[p.buffer][0]
+                zone = zone | knife[p.buffer][0]
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
@@ -370,14 +421,26 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     return out
 
 
-def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence[str] = ()) -> Verdict:
+def _port_digest(port) -> str:
+    """A digest of what vlref's march on a port reads: its scene, camera, depth, colour and shadow maps."""
+    h = hashlib.sha256(scene_hash(port.scene).encode())
+    h.update(repr((port.camera, port.has_shadows)).encode())
+    for a in (port.depth, port.colour, *(t.texels for m in port.shadow_maps for t in m.tiles)):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence[str] = (), *,
+          cache: dict | None = None) -> Verdict:
     """The whole-frame verdict on the port of ``manifest`` (module docstring); with ``out_dir``, writes
     verdict.json, index.html and one report folder per comparison there (all or nothing).
 
     ``preset``: the preset of ``[[passes]]`` entries that name none and of a manifest without ``preset``
-    (default :data:`DEFAULT_PRESET`); ``overrides``: ``--set`` overrides of the scene. Raises
-    :class:`InputError` on bad input (unknown preset, missing shadow map of a shadowed light, a pass naming
-    no vlref buffer, sizes that differ).
+    (default :data:`DEFAULT_PRESET`); ``overrides``: ``--set`` overrides of the scene. ``cache``: a dict the
+    caller keeps across calls: vlref's render of a scene, and its march (with the knife-edge pixels) on a
+    port's buffers, are kept there by content (scene hash; a digest of the port's raster buffers), so that
+    judging many variants of one port re-renders nothing they share. Raises :class:`InputError` on bad input
+    (unknown preset, missing shadow map of a shadowed light, a pass naming no vlref buffer, sizes that differ).
     """
     port = load_port(manifest, overrides)
     own_preset = port.preset or preset or DEFAULT_PRESET
@@ -385,16 +448,23 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
         tolerance(name)  # unknown presets are bad input before any work
     technique = TECHNIQUES[port.scene.render.technique]
 
+    cache = {} if cache is None else cache
     scene = port.scene if port.has_shadows else _scene_without_shadows(port.scene)
-    frame = prepare_frame(scene)
-    reference = technique.render(frame.scene, frame)
-    light_reaches = bool(np.any(np.asarray(reference["inscatter"]) > 0))
-    frame_p = port_frame(port)
-    own = technique.render(port.scene, frame_p)
+    key = ("scene", scene_hash(scene))
+    if key not in cache:
+        frame = prepare_frame(scene)
+        reference = technique.render(frame.scene, frame)
+        cache[key] = frame, reference, bool(np.any(np.asarray(reference["inscatter"]) > 0))
+    frame, reference, light_reaches = cache[key]
+    key = ("port", _port_digest(port))
+    if key not in cache:
+        frame_p = port_frame(port)
+        cache[key] = frame_p, technique.render(port.scene, frame_p), {}
+    frame_p, own, memo = cache[key]
 
-    comparisons = _own_passes(port, frame_p, own, own_preset, reference, technique)
+    comparisons = _own_passes(port, frame_p, own, own_preset, reference, technique, memo)
     comparisons.append(_camera_check(port, frame.camera))
-    comparisons += _against_scene(port, frame, frame_p, reference, light_reaches)
+    comparisons += _against_scene(port, frame, frame_p, reference, light_reaches, memo)
     passes = tuple(PassVerdict(c.name, c.group, c.preset, not c.reason, c.reason, _metrics(c),
                                str(Path(out_dir) / _slug(c.group) / _slug(c.name) / "report.html")
                                if out_dir is not None and c.report is not None else None) for c in comparisons)
@@ -404,8 +474,27 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     return verdict
 
 
-def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -> list[_Comparison]:
-    """The port's depth, shadow maps, shadow decisions, scene colour and final frame against the scene."""
+def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool,
+                   memo: dict | None = None) -> list[_Comparison]:
+    """The port's depth, shadow maps, shadow decisions, scene colour and final frame against the scene;
+    ``memo`` keeps what depends on the raster buffers only (all but ``end_to_end``) for the next call."""
+    memo = {} if memo is None else memo
+    if "against" not in memo:
+        memo["against"] = _raster_against_scene(port, frame, frame_p, memo)
+    out = list(memo["against"])
+    if port.final is None:
+        out.append(_Comparison("end_to_end", GROUP_SCENE, SCENE_PRESETS["end_to_end"], None,
+                               "the manifest declares no `final`: the port's frame is not judged against the scene"))
+    else:
+        out.append(_compare("end_to_end", GROUP_SCENE, reference["final"], port.final, SCENE_PRESETS["end_to_end"],
+                            None, memo["shading_zone"]("end_to_end"), light_reaches, "final",
+                            ("vlref render final", "port final")))
+    return out
+
+
+def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]:
+    """The port's depth, shadow maps, shadow decisions and scene colour against the scene; puts the
+    shading-zone function in ``memo["shading_zone"]``."""
     g = frame.gbuffer
     hit = np.isfinite(g.depth)
     points = g.position[hit]
@@ -416,9 +505,13 @@ def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -
     def k_of(kind):
         return tolerance(SCENE_PRESETS[kind]).edge_pixels
 
-    depth_edges = depth_discontinuities(g.depth) | depth_discontinuities(port.depth)
+    depth_edges = depth_discontinuities(g.depth) | depth_discontinuities(port.depth) | _creases(g.normal, hit)
+    # the depth comparison's own zone finds every step it could fail on: a contact edge (a cylinder's foot on
+    # the ground) steps 1/z by ~4 %, under DEPTH_JUMP but over raster-depth's tolerance
+    jump = tolerance(SCENE_PRESETS["depth"]).rel_tol / 2.0
+    steps = depth_discontinuities(g.depth, jump) | depth_discontinuities(port.depth, jump)
     out.append(_compare("depth", GROUP_SCENE, _inverse(g.depth), _inverse(port.depth), SCENE_PRESETS["depth"], None,
-                        dilate(depth_edges, k_of("depth")), False, "depth", ("vlref ray-cast depth", "port depth")))
+                        dilate(steps, k_of("depth")), False, "depth", ("vlref ray-cast depth", "port depth")))
 
     for m in port.shadow_maps:
         i = m.light
@@ -431,35 +524,37 @@ def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool) -
             r, p = _port_tile_distances(tile, light, sh, m.encoding, m.convention, frame.geometry)
             ref_tiles.append(r)
             port_tiles.append(p)
-            zones.append(edge_zone(k, depths=[r, p]))
+            zones.append(dilate(depth_discontinuities(r, MAP_JUMP) | depth_discontinuities(p, MAP_JUMP), k))
         out.append(_compare(f"shadow_map[light={i}]", GROUP_SCENE, _inverse(np.hstack(ref_tiles)),
                             _inverse(np.hstack(port_tiles)), SCENE_PRESETS["shadow_map"], None, np.hstack(zones),
                             False, f"shadow map of light {i}",
                             (f"vlref map of light {i} through the port's texel rays", f"port map of light {i}")))
         k = k_of("shadow_test")
         zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+        reached = _on_pixels(_inside_volume(light, points), hit, False)
+        if not reached.any():   # the light reaches no visible surface: no decision of its maps shows
+            continue
         out.append(_compare(f"shadow_test[light={i}]", GROUP_SCENE,
                             _on_pixels(_lit(maps_ref, packed, i, points), hit),
-                            _on_pixels(_lit(maps_port, packed, i, points), hit), SCENE_PRESETS["shadow_test"], hit,
+                            _on_pixels(_lit(maps_port, packed, i, points), hit), SCENE_PRESETS["shadow_test"],
+                            reached,
                             dilate(_on_pixels(zone, hit, False) | depth_edges, k), False, f"lit fraction of light {i}",
                             (f"vlref map lookups of light {i} at the visible surface points",
                              f"port map lookups of light {i}")))
 
+    zones: dict[str, np.ndarray] = {}
+
     def shading_zone(kind):
-        k = k_of(kind)
-        zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
-        return dilate(_on_pixels(zone, hit, False) | depth_edges, k)
+        if kind not in zones:
+            k = k_of(kind)
+            zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+            zones[kind] = dilate(_on_pixels(zone, hit, False) | depth_edges, k)
+        return zones[kind]
 
     out.append(_compare("scene_colour", GROUP_SCENE, frame.scene_colour, port.colour, SCENE_PRESETS["scene_colour"],
                         None, shading_zone("scene_colour"), False,
                         "scene_colour", ("vlref scene colour", "port colour")))
-    if port.final is None:
-        out.append(_Comparison("end_to_end", GROUP_SCENE, SCENE_PRESETS["end_to_end"], None,
-                               "the manifest declares no `final`: the port's frame is not judged against the scene"))
-    else:
-        out.append(_compare("end_to_end", GROUP_SCENE, reference["final"], port.final, SCENE_PRESETS["end_to_end"],
-                            None, shading_zone("end_to_end"), light_reaches, "final",
-                            ("vlref render final", "port final")))
+    memo["shading_zone"] = shading_zone
     return out
 
 

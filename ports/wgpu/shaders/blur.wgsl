@@ -6,6 +6,8 @@
 
 override AXIS: u32 = 0u;                     // 0 horizontal, 1 vertical
 override BENIGN_REVERSED_SUM: bool = false;  // taps summed -3..3 in order
+override BUG_GAUSS_NO_TWO: bool = false;     // Gaussian exp(-k^2 / sigma^2): the factor 2 of 2 sigma^2 missing
+override BUG_BLUR_EPS_X10: bool = false;     // depth weight 1 / (|dz| + 10 eps): the bilateral guard 10x too loose
 
 const TAP_ORDER = array<i32, 7>(0, -3, -2, -1, 1, 2, 3);
 
@@ -21,8 +23,9 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     for (var j = 0; j < 7; j++) {
         let k = select(TAP_ORDER[j], j - 3, BENIGN_REVERSED_SUM);
         let q = clamp(px + k * axis, vec2i(0), size - 1);
-        let gk = exp(-f32(k * k) / (2.0 * sigma * sigma)) / sqrt(2.0 * PI * sigma * sigma);
-        let w = gk / (depth_delta(linear_depth(textureLoad(depth_tex, q, 0)), z0) + g.march.z);
+        let gk = exp(-f32(k * k) / (select(2.0, 1.0, BUG_GAUSS_NO_TWO) * sigma * sigma)) / sqrt(2.0 * PI * sigma * sigma);
+        let eps = select(g.march.z, 10.0 * g.march.z, BUG_BLUR_EPS_X10);
+        let w = gk / (depth_delta(linear_depth(textureLoad(depth_tex, q, 0)), z0) + eps);
         acc += w * textureLoad(light_tex, q, 0).rgb;
         wsum += w;
     }

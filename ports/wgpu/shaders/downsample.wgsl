@@ -4,6 +4,7 @@
 @group(0) @binding(1) var depth_tex: texture_depth_2d;
 
 override BUG_AVERAGE_DEPTH: bool = false;   // mean of the block instead of its min
+override BUG_BLOCK_END_FLOOR: bool = false; // block end rounded down: odd sizes drop their last row/column
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
@@ -11,7 +12,7 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     let hi = vec2u(g.size.xy);
     let lo = vec2u(g.size.zw);
     let start = j * hi / lo;
-    let stop = ((j + 1u) * hi + lo - 1u) / lo;
+    let stop = select(((j + 1u) * hi + lo - 1u) / lo, (j + 1u) * hi / lo, BUG_BLOCK_END_FLOOR);
     var z = SKY;
     var sum = 0.0;
     for (var r = start.y; r < stop.y; r++) {

@@ -6,6 +6,9 @@
 @group(0) @binding(4) var normal_tex: texture_2d<f32>;
 @group(0) @binding(5) var albedo_tex: texture_2d<f32>;
 
+override BUG_NO_INV_PI: bool = false;         // Lambert without its 1/pi
+override BUG_EYE_DEPTH_AS_RANGE: bool = false; // surface point at eye depth along the ray (as if ray length)
+
 @fragment
 fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     let px = vec2i(pos.xy);
@@ -15,7 +18,7 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     }
     let d = pixel_ray(pos.xy, g.size.xy);
     let n = textureLoad(normal_tex, px, 0).xyz;
-    let x = g.eye.xyz + d * (z / dot(d, g.fwd.xyz)) + 1e-3 * n;
+    let x = g.eye.xyz + d * select(z / dot(d, g.fwd.xyz), z, BUG_EYE_DEPTH_AS_RANGE) + 1e-3 * n;
     var s = vec3f(0.0);
     for (var k = 0u; k < arrayLength(&lights); k++) {
         let inc = incidence(lights[k], x);
@@ -25,5 +28,5 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
         }
     }
     let albedo = textureLoad(albedo_tex, px, 0).xyz;
-    return vec4f(albedo * (s / PI + g.ambient.xyz), 1.0);
+    return vec4f(albedo * (s / select(PI, 1.0, BUG_NO_INV_PI) + g.ambient.xyz), 1.0);
 }

@@ -15,6 +15,11 @@ struct Light {
 override BUG_NO_RANGE_WINDOW: bool = false;   // windowed law without its (1 - (d/R)^4)^2 window
 override BUG_SHADOW_HALF_TEXEL: bool = false; // nearest texel taken at u*res - 0.5 (texel-centre mix-up)
 override BUG_CUBE_V_UP: bool = false;         // cube face v not flipped (GL-style t axis)
+override BUG_UNITY_CONE_UNSQUARED: bool = false; // unity cone law saturate(a cos + b) without its square
+override BUG_LINEAR_CONE_IN_COS: bool = false;   // linear cone law interpolated in cos instead of in angle
+override BUG_UNITY_ATT_NO_FADE: bool = false;    // unity attenuation without its saturate(5 (1 - sqrt u)) fade
+override BUG_STRENGTH_SWAPPED: bool = false;     // shadow strength as lerp(lit, 1, s) instead of lerp(1, lit, s)
+override BUG_SHADOW_PLANAR: bool = false;        // stored depth taken as radial distance (no texel-ray factor)
 
 struct Incidence { l: vec3f, e: vec3f }
 
@@ -26,7 +31,8 @@ fn attenuation(li: Light, d2: f32) -> f32 {
     }
     let law = i32(li.law.x);
     if (law == 1) {   // unity (folk LUT): 1/(1 + 25u) * saturate(5 (1 - sqrt u))
-        return clamp(5.0 * (1.0 - sqrt(u)), 0.0, 1.0) / (1.0 + 25.0 * u);
+        let fade = select(clamp(5.0 * (1.0 - sqrt(u)), 0.0, 1.0), 1.0, BUG_UNITY_ATT_NO_FADE);
+        return fade / (1.0 + 25.0 * u);
     }
     let inv = 1.0 / max(d2, 1e-4);
     if (law == 2 && !BUG_NO_RANGE_WINDOW) {   // windowed: saturate(1 - u^2)^2 / d^2
@@ -43,12 +49,15 @@ fn cone_falloff(li: Light, cos_t: f32) -> f32 {
     let law = i32(li.law.y);
     if (law == 0) {
         let a = clamp(cos_t * li.law.z + li.law.w, 0.0, 1.0);
-        return a * a;
+        return select(a * a, a, BUG_UNITY_CONE_UNSQUARED);
     }
     if (cos_t >= li.cone.y) {
         return 1.0;
     }
     if (law == 1) {
+        if (BUG_LINEAR_CONE_IN_COS) {
+            return clamp((cos_t - li.cone.x) / (li.cone.y - li.cone.x), 0.0, 1.0);
+        }
         return clamp((li.cone.z - acos(cos_t)) / (li.cone.z - li.cone.w), 0.0, 1.0);
     }
     let x = (cos_t - li.cone.x) / (li.cone.y - li.cone.x);
@@ -128,7 +137,10 @@ fn shadow_visibility(li: Light, x: vec3f) -> f32 {
     let fr = li.dir_range.w;
     let z = fr * n / (d * (fr - n) + n);
     let c = (2.0 * (vec2f(texel) + 0.5) / res - 1.0) * tan_h;
-    let stored = z * sqrt(1.0 + c.x * c.x + c.y * c.y);
+    let stored = select(z * sqrt(1.0 + c.x * c.x + c.y * c.y), z, BUG_SHADOW_PLANAR);
     let lit = select(0.0, 1.0, length(w) <= stored);
+    if (BUG_STRENGTH_SWAPPED) {
+        return mix(lit, 1.0, li.color_strength.w);
+    }
     return 1.0 - li.color_strength.w * (1.0 - lit);
 }

@@ -11,6 +11,9 @@ override BUG_STEPS_MINUS_ONE: bool = false;  // loop runs N - 1 samples (step st
 override BUG_ADVANCE_TWICE: bool = false;    // t advanced by the step at the top and the bottom of the loop
 override BUG_BAYER_TRANSPOSED: bool = false; // B[x mod 4][y mod 4]
 override BUG_SIGMA_S_FOR_T: bool = false;    // extinction taken as the scattering coefficient
+override BUG_NO_MAX_DISTANCE: bool = false;  // view ray cut at the scene depth only, not at render.max_distance
+override BUG_BALL_T0_UNCLAMPED: bool = false; // ray-ball entry not clamped at the eye (camera inside a volume)
+override BUG_PHASE_SCHLICK: bool = false;    // Schlick's approximation (k = 1.55 g - 0.55 g^3) instead of HG
 
 const BAYER4 = array<u32, 16>(0u, 8u, 2u, 10u, 12u, 4u, 14u, 6u, 3u, 11u, 1u, 9u, 15u, 7u, 13u, 5u);
 
@@ -20,6 +23,11 @@ fn vs_volume(@location(0) p: vec3f) -> @builtin(position) vec4f {
 }
 
 fn hg(cos_t: f32, gg: f32) -> f32 {
+    if (BUG_PHASE_SCHLICK) {
+        let k = 1.55 * gg - 0.55 * gg * gg * gg;
+        let q = 1.0 + k * cos_t;
+        return (1.0 - k * k) / (4.0 * PI * q * q);
+    }
     let k = 1.0 + gg * gg - 2.0 * gg * cos_t;
     return (1.0 - gg * gg) / (4.0 * PI * k * sqrt(k));
 }
@@ -34,7 +42,7 @@ fn ball(p: vec3f, r: f32, o: vec3f, d: vec3f, t_end: f32) -> vec2f {
         return vec2f(0.0);
     }
     let s = sqrt(disc);
-    return vec2f(max(beta - s, 0.0), min(beta + s, t_end));
+    return vec2f(select(max(beta - s, 0.0), beta - s, BUG_BALL_T0_UNCLAMPED), min(beta + s, t_end));
 }
 
 fn in_cone(li: Light, x: vec3f) -> bool {
@@ -96,7 +104,8 @@ fn fs_march(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     let li = lights[light_index.x];
     let px = vec2u(pos.xy);
     let d = pixel_ray(pos.xy, g.size.zw);
-    let t_end = min(textureLoad(depth_lo, px, 0).r / dot(d, g.fwd.xyz), g.medium.x);
+    let t_surf = textureLoad(depth_lo, px, 0).r / dot(d, g.fwd.xyz);
+    let t_end = select(min(t_surf, g.medium.x), t_surf, BUG_NO_MAX_DISTANCE);
     var seg: vec2f;
     if (li.pos_kind.w == 1.0) {
         seg = spot_segment(li, g.eye.xyz, d, t_end);

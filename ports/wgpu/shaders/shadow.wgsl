@@ -8,6 +8,9 @@ struct Tile {
 }
 @group(0) @binding(0) var<uniform> tile: Tile;
 
+override BUG_BIAS_SIGN: bool = false;   // caster-side bias subtracted: r - bias (the caster moves toward the light)
+override BUG_SLOPE_COT: bool = false;   // slope as cos/sin (cot) instead of sin/cos (tan)
+
 struct VsOut {
     @builtin(position) pos: vec4f,
     @location(0) pv: vec3f,
@@ -23,8 +26,10 @@ fn vs_main(@location(0) p: vec3f, @location(1) n: vec3f, @location(2) albedo: ve
 fn fs_main(v: VsOut) -> @builtin(frag_depth) f32 {
     let r = length(v.pv);
     let c = abs(dot(normalize(v.nv), v.pv / r));
-    let slope = min(sqrt(max(1.0 - c * c, 0.0)) / max(c, 1e-12), 10.0);
-    let z = v.pv.z * (r + tile.params.z + tile.params.w * slope) / r;
+    let s = sqrt(max(1.0 - c * c, 0.0));
+    let slope = min(select(s / max(c, 1e-12), c / max(s, 1e-12), BUG_SLOPE_COT), 10.0);
+    let bias = tile.params.z + tile.params.w * slope;
+    let z = v.pv.z * (r + select(bias, -bias, BUG_BIAS_SIGN)) / r;
     let n = tile.params.x;
     let f = tile.params.y;
     return clamp(n * (f / z - 1.0) / (f - n), 0.0, 1.0);

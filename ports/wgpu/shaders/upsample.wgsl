@@ -7,6 +7,7 @@
 
 override BUG_UPSAMPLE_NO_DEPTH: bool = false;  // bilinear weights only
 override BENIGN_REVERSED_SUM: bool = false;    // sums in the order 11, 01, 10, 00
+override BUG_BLUR_EPS_X10: bool = false;       // depth weight 1 / (|dz| + 10 eps): the bilateral guard 10x too loose
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
@@ -23,7 +24,8 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     for (var k = 0; k < 4; k++) {
         w[k] = b[k];
         if (!BUG_UPSAMPLE_NO_DEPTH) {
-            w[k] = b[k] / (depth_delta(z, textureLoad(depth_lo, taps[k], 0).r) + g.march.z);
+            let eps = select(g.march.z, 10.0 * g.march.z, BUG_BLUR_EPS_X10);
+            w[k] = b[k] / (depth_delta(z, textureLoad(depth_lo, taps[k], 0).r) + eps);
         }
     }
     var wsum = ((w[0] + w[1]) + w[2]) + w[3];
