@@ -111,12 +111,14 @@ def _stderr_reader(proc, stream=None):
     return chunks, thread
 
 
-def _interrupt(work: Path, argv: list[str], marker: bytes, sig: int, group: bool = False) -> None:
+def _interrupt(work: Path, argv: list[str], marker: bytes, sig: int, group: bool = False, env=None) -> None:
     """Run ``vlref ARGV`` in ``work`` (empty), send ``sig`` once ``marker`` shows on its stdout or stderr (its
     long phase), and check the outcome: exit 128 + sig, the last line ``vlref: interrupted``, no traceback
     (nor from a child process), and ``work`` still empty (no output, no temporary file or folder).
-    ``group``: to the whole process group, as Ctrl-C in a terminal does (children get it too)."""
-    proc = subprocess.Popen([sys.executable, "-m", "vlref", *argv], cwd=work, env=dict(ENV, PYTHONUNBUFFERED="1"),
+    ``group``: to the whole process group, as Ctrl-C in a terminal does (children get it too); ``env``: more
+    environment variables."""
+    proc = subprocess.Popen([sys.executable, "-m", "vlref", *argv], cwd=work,
+                            env=dict(ENV, PYTHONUNBUFFERED="1", **(env or {})),
                             stdout=subprocess.PIPE,
                             stderr=subprocess.STDOUT, start_new_session=True)
     chunks, reader = _stderr_reader(proc, proc.stdout)
@@ -186,8 +188,11 @@ def test_every_long_command_exits_cleanly_on_a_signal(tmp_path, argv, marker, si
     if "{inputs}/port/port.toml" in argv:
         from vlref.port import export_port
         export_port("pillars", inputs / "port", ("render.width=160", "render.height=90"))
+    # warmup with a warm cache (CI fills it first) ends in about two seconds: give it an empty one, so that it
+    # is still compiling when the signal comes
+    env = {"NUMBA_CACHE_DIR": str(inputs / "cold-cache")} if argv[0] == "warmup" else None
     _interrupt(_work(tmp_path), [a.replace("{inputs}", str(inputs)) for a in argv], marker, sig,
-               group=sig == signal.SIGINT)
+               group=sig == signal.SIGINT, env=env)
 
 
 def test_ctrl_c_under_a_local_dask_cluster_exits_cleanly(tmp_path):

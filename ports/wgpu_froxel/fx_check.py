@@ -28,7 +28,7 @@ import fx_port  # noqa: E402
 import kz_scene  # noqa: E402
 from fx_variants import VARIANTS  # noqa: E402
 
-PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-half"),
+PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-history"),
           ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
           ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-half"), ("transmittance", "gpu-half"),
           ("final", "gpu-half"))
