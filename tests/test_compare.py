@@ -132,7 +132,7 @@ def test_presets_load_and_loosen_in_order():
     presets = load_presets()
     order = ["float32", "gpu-full", "gpu-half", "gpu-quarter"]
     assert set(presets) == {"exact", *order, "raster-depth", "raster-shadow-map", "raster-shadow-test",
-                            "raster-colour", "end-to-end", "gpu-history"}
+                            "raster-colour", "end-to-end", "gpu-sampled"}
     exact = presets["exact"]
     assert (exact.abs_tol, exact.rel_tol, exact.max_fail_fraction, exact.max_mean_abs) == (0, 0, 0, 0)
     for key in ("abs_tol", "rel_tol", "max_mean_abs", "edge_pixels", "edge_rel", "edge_abs"):
@@ -140,10 +140,10 @@ def test_presets_load_and_loosen_in_order():
         assert all(a < b for a, b in zip(values, values[1:])), key
     # GPU ports: no failing pixel outside the edge zone; float32 keeps its knife-edge share
     assert [presets[n].max_fail_fraction for n in order] == [1e-3, 0.0, 0.0, 0.0]
-    # the temporal history: gpu-half per texel, plus a bounded share of reprojection decisions that flip
-    history, half = presets["gpu-history"], presets["gpu-half"]
-    assert (history.rel_tol, history.abs_tol, history.max_mean_abs) == (half.rel_tol, half.abs_tol, half.max_mean_abs)
-    assert 0 < history.max_fail_fraction <= 2e-2
+    # what a port reads through its sampler (8-bit filter weights): gpu-half per texel, plus a bounded share
+    sampled, half = presets["gpu-sampled"], presets["gpu-half"]
+    assert (sampled.rel_tol, sampled.abs_tol, sampled.max_mean_abs) == (half.rel_tol, half.abs_tol, half.max_mean_abs)
+    assert 0 < sampled.max_fail_fraction <= 2e-2
     for p in presets.values():
         assert p.description and p.max_flip_mean is None
 

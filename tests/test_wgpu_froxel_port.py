@@ -74,7 +74,7 @@ def test_cli_march_of_the_sequence_and_compare_of_an_exported_history(sequences,
     assert main(["march", *map(str, manifests), "-o", str(tmp_path / "marched"), "--stages", "-q"]) == 0
     last = f"frame_{FRAMES - 1:04d}"
     ref, test = tmp_path / "marched" / last / "froxel_history.exr", tmp_path / "port" / last / "port_froxel_history.npy"
-    assert main(["compare", str(ref), str(test), "--preset", "gpu-history", "-q"]) == 0   # sampler-fetched history
+    assert main(["compare", str(ref), str(test), "--preset", "gpu-sampled", "-q"]) == 0   # sampler-fetched history
     assert main(["compare", str(ref), str(test), "--preset", "float32", "-q"]) == 1    # rgba16float grids
 
 

@@ -28,16 +28,17 @@ import fx_port  # noqa: E402
 import kz_scene  # noqa: E402
 from fx_variants import VARIANTS  # noqa: E402
 
-PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-history"),
+PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-sampled"),
           ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
-          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-half"), ("transmittance", "gpu-half"),
-          ("final", "gpu-half"))
+          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-sampled"), ("transmittance", "gpu-sampled"),
+          ("final", "gpu-sampled"))
 """(buffer, preset). The slice boundaries are float32 host values: ``float32``. The grids are rgba16float,
 one fp16 rounding per store: ``gpu-full``, but for what the port reads through the hardware trilinear
 sampler, whose sub-texel weights are 8-bit fractions on real GPUs (up to 1/512 of the difference between
 neighbouring texels, which across a shadow shaft or along depth can be as large as the value itself):
-the history (fetched at the reprojected position) and the apply outputs take ``gpu-half``, the preset that
-states it absorbs 8-bit filtering weights. Measured on an H100 (README): with a moving camera and sharp
+the history (fetched at the reprojected position) and the apply outputs take ``gpu-sampled``: ``gpu-half``
+per texel (it states that it absorbs 8-bit filtering weights) plus a bounded share of texels, since vlref builds
+no geometric zone for 3-D grids. Measured on an H100 (README): with a moving camera and sharp
 shafts the history fails ``gpu-full`` (35 of 3840 froxels, 1.8x) and the apply outputs do (1.4x); the frame
 counts, fetched the same way but nearly constant, stay within ``gpu-full``."""
 
