@@ -46,7 +46,7 @@ def test_port_buffers(vlref_compare, pytestconfig):
 
 @pytest.fixture
 def port_project(pytester):
-    pytester.makepyfile(test_port=PORT_TESTS)
+    pytester.makepyfile(test_team_port=PORT_TESTS)  # a name no module of this suite has
     export_port("pillars", pytester.path / "port", SET + ['render.technique="killzone"'])
     return pytester
 
@@ -68,13 +68,13 @@ def test_plugin_workflow(port_project):
     again = p.runpytest_inprocess("-p", "no:cacheprovider")   # the stored golden is used
     again.assert_outcomes(passed=2, failed=1)
     again.stdout.fnmatch_lines(["*vlref: final fails preset float32 against *final.exr: failing_fraction 1 > 0.001*",
-                                "*report: *vlref-report/test_port.py_test_one_percent_off/final/report.html*",
+                                "*report: *vlref-report/test_team_port.py_test_one_percent_off/final/report.html*",
                                 "*vlref: 3 comparison(s), 1 failed; summary *summary.html*"])
-    folder = p.path / "vlref-report" / "test_port.py_test_one_percent_off" / "final"
+    folder = p.path / "vlref-report" / "test_team_port.py_test_one_percent_off" / "final"
     report = json.loads((folder / "report.json").read_text())
     assert report["verdict"] == "fail" and report["metrics"]["failing_pixels"] == 48 * 27
     assert sorted(x.name for x in (p.path / "vlref-report").iterdir()) == [
-        "summary.html", "summary.json", "test_port.py_test_one_percent_off"]   # passes write no report
+        "summary.html", "summary.json", "test_team_port.py_test_one_percent_off"]   # passes write no report
 
     summary = json.loads((p.path / "vlref-report" / "summary.json").read_text())
     assert (summary["comparisons"], summary["failed"]) == (3, 1)
@@ -85,7 +85,7 @@ def test_plugin_workflow(port_project):
     assert not off["passed"] and off["report"] == str(folder / "report.html")
     assert off["metrics"]["failing_pixels"] == report["metrics"]["failing_pixels"]
     page = (p.path / "vlref-report" / "summary.html").read_text()
-    assert page.count("<tr class=") == 3 and 'href="test_port.py_test_one_percent_off/final/report.html"' in page
+    assert page.count("<tr class=") == 3 and 'href="test_team_port.py_test_one_percent_off/final/report.html"' in page
 
     meta["scene_hash"] = "0" * 64   # the scene changed since the golden was generated
     (golden.parent / "golden.json").write_text(json.dumps(meta))
@@ -100,7 +100,7 @@ def test_report_all_and_options(port_project):
     p.runpytest_inprocess("-p", "no:cacheprovider", "--vlref-generate", "--vlref-reports", "all",
                           "--vlref-report-dir", str(out), "--vlref-golden-dir", "g", "-k", "faithful"
                           ).assert_outcomes(passed=1)
-    assert (out / "test_port.py_test_faithful" / "final" / "report.html").is_file()
+    assert (out / "test_team_port.py_test_faithful" / "final" / "report.html").is_file()
     assert list((p.path / "g" / "killzone").glob("pillars-*/final.exr"))
     p.makepyfile(test_bad="""
 import pytest

@@ -181,8 +181,13 @@ def test_edge_zone_geometry():
 
 
 def test_gpu_presets_allow_no_failing_pixel_outside_the_edge_zone():
+    """All but gpu-sampled: what a port reads through its sampler (3-D grids, no geometric zone yet) keeps a
+    bounded share (tests/test_compare.py)."""
     for name, tol in load_presets().items():
         if name.startswith(("gpu-", "raster-")) or name == "end-to-end":
+            if name == "gpu-sampled":
+                assert 0 < tol.max_fail_fraction <= 2e-2
+                continue
             assert tol.max_fail_fraction == 0 and tol.edge_pixels >= 1, name
 
 

@@ -33,5 +33,6 @@ def exported(tmp_path_factory):
 @pytest.mark.parametrize("port_pass, buffer, preset", kz_check.PASSES)
 def test_port_pass(exported, vlref_compare, port_pass, buffer, preset):
     manifest, passes = exported
-    report = vlref_compare(passes[port_pass], buffer, port=manifest, preset=preset, ignore_sky=port_pass == "depth_lo")
+    report = vlref_compare(passes[port_pass], buffer, port=manifest, preset=preset or "gpu-half",  # fp16 targets
+                           ignore_sky=port_pass == "depth_lo")
     assert report.metrics["failing_pixels"] == 0 and report.metrics["compared_pixels"] > 1000

@@ -189,10 +189,11 @@ class VlrefSession:
                         pytrace=False)
         return np.asarray(buffers[stage], dtype=np.float64), f"vlref march {port} ({stage})"
 
-    def judge(self, nodeid: str, buffer, stage: str, *, scene=None, technique=None, preset="float32",
+    def judge(self, nodeid: str, buffer, stage: str, *, scene=None, technique=None, preset=None,
               overrides=(), port=None, ignore_sky=False):
-        """Compare ``buffer`` with the reference's ``stage``; record it; fail the test when it fails."""
-        overrides = tuple(overrides)
+        """Compare ``buffer`` with the reference's ``stage`` under ``preset`` (None: ``float32``); record it; fail
+        the test when it fails."""
+        overrides, preset = tuple(overrides), preset or "float32"
         if port is not None:
             ref, source = self._marched(stage, port, overrides)
         else:
