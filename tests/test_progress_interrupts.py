@@ -187,7 +187,8 @@ def test_every_long_command_exits_cleanly_on_a_signal(tmp_path, argv, marker, si
         (inputs / "sweep.toml").write_text(SWEEP)
     if "{inputs}/port/port.toml" in argv:
         from vlref.port import export_port
-        export_port("pillars", inputs / "port", ("render.width=160", "render.height=90"))
+        # 640x360 at 4096 steps: the march lasts long enough (tens of seconds) to be interrupted mid-way
+        export_port("pillars", inputs / "port", ("render.width=640", "render.height=360"))
     # warmup with a warm cache (CI fills it first) ends in about two seconds: give it an empty one, so that it
     # is still compiling when the signal comes
     env = {"NUMBA_CACHE_DIR": str(inputs / "cold-cache")} if argv[0] == "warmup" else None
