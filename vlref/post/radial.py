@@ -31,6 +31,8 @@ from numba import njit, prange
 from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
+"""The texture address modes, by name; kernels take a mode's index, named below."""
+ADDRESS_CLAMP, ADDRESS_REPEAT, ADDRESS_BORDER = (ADDRESS_MODES.index(m) for m in ADDRESS_MODES)
 
 
 def _image(image) -> np.ndarray:
@@ -42,11 +44,11 @@ def _image(image) -> np.ndarray:
 
 @njit(cache=True, fastmath=False)
 def _texel(i, n, mode):
-    """Texel index after addressing (0 clamp, 1 repeat, 2 border) and whether it reads the image."""
-    if mode == 1:
+    """Texel index after addressing (``ADDRESS_*``) and whether it reads the image."""
+    if mode == ADDRESS_REPEAT:
         return i % n, True
     inside = 0 <= i < n
-    return min(max(i, 0), n - 1), inside or mode == 0
+    return min(max(i, 0), n - 1), inside or mode == ADDRESS_CLAMP
 
 
 @njit(cache=True, fastmath=False)
@@ -137,15 +139,15 @@ def _radial_rows(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay,
     and ``ty``) is the same for every pixel at each tap, and each pixel's ``u`` is stepped by the same
     repeated subtraction as the shaders (a row buffer). Per pixel the operations and their order are
     :func:`_fetch_add`'s, so the bits are those of the pixel-by-pixel loop and independent of the thread
-    count. ``mode``: 0 clamp, 1 repeat, 2 border, ``img`` then padded with one texel of 0 on every side
+    count. ``mode``: an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0 on every side
     (a tap outside reads 0 where the clamped index lands in the padding).
     """
     C = img.shape[2]
     out = np.zeros((H, W, C))
-    offset = 1 if mode == 2 else 0
+    offset = 1 if mode == ADDRESS_BORDER else 0
     lo_x, hi_x = -offset, W - 1 + offset
     lo_y, hi_y = -offset, H - 1 + offset
-    repeat = mode == 1
+    repeat = mode == ADDRESS_REPEAT
     for y in prange(H):
         u = np.empty(W)
         du = np.empty(W)
