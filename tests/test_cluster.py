@@ -1,9 +1,9 @@
-"""Scale-out on Dask (vlref.cluster): golden entries, reference tiles and sweep points give the same bytes
+"""Scale-out on Dask (vlref.work_items): golden entries, reference tiles and sweep points give the same bytes
 on a cluster as in this process; failures are reported by item and write nothing; a worker killed
 mid-run loses nothing.
 
 One 2-worker LocalCluster per module (worker processes with one Dask thread each, NUMBA_CACHE_DIR passed
-through, built by vlref.cluster.local_cluster as `--scheduler local:2` builds it), reached through its
+through, built by vlref.work_items.local_cluster as `--scheduler local:2` builds it), reached through its
 tcp:// address, so the tests also exercise the existing-scheduler path. `distributed` comes with the
 `test` extra (setup.cfg), so it is imported, not skipped.
 """
@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 from vlref.cli import main
-from vlref.cluster import local_cluster
+from vlref.work_items import local_cluster
 from vlref.oracle.golden import SUITE_FILE, verify
 from vlref.reference import render_reference
 from vlref.reference.tiles import render_reference_tiled

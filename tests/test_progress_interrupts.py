@@ -198,7 +198,7 @@ def test_every_long_command_exits_cleanly_on_a_signal(tmp_path, argv, marker, si
 
 def test_ctrl_c_under_a_local_dask_cluster_exits_cleanly(tmp_path):
     """``--scheduler local:2``: Ctrl-C reaches the worker processes too; they ignore it, and vlref closes the
-    cluster: one line, no worker traceback (golden and reference tiles take the same path, vlref.cluster)."""
+    cluster: one line, no worker traceback (golden and reference tiles take the same path, vlref.work_items)."""
     (tmp_path / "sweep.toml").write_text(SWEEP)
     _interrupt(_work(tmp_path), ["sweep", str(tmp_path / "sweep.toml"), "-o", "out", "--scheduler", "local:2"],
                b"item/s", signal.SIGINT, group=True)

@@ -23,7 +23,7 @@ The package is laid out as the pipeline it computes::
     errors.py   InputError, the one error type for bad input (``FILE: key.path: reason``)
     numeric.py  float-type helpers (``cast``, ``zero_one``) and vectorisable ``exp`` / ``expm1``
     parallel.py tasks handed out on demand to the kernels' threads, arrays without reference counts
-    cluster.py  independent work items in this process or on a Dask cluster
+    work_items.py  independent work items in this process or on a Dask cluster
     memory.py   peak memory of a render, estimated before anything is allocated
     notebook.py helpers for the Jupyter notebooks (display, controls, preview re-renders)
     cli/        the ``vlref`` command: every argument parser, one module per sub-command

@@ -12,7 +12,7 @@ Sweep file (TOML; paths relative to it)::
     "medium.anisotropy" = [0.0, 0.6]
     # or, instead of [grid]: points = [["render.steps=4"], ["render.steps=8", "render.sampling=bayer4"]]
 
-Each (point, technique) is an item (:mod:`vlref.cluster`) that renders the scene and compares its
+Each (point, technique) is an item (:mod:`vlref.work_items`) that renders the scene and compares its
 inscatter with the quadrature reference (:func:`vlref.reference.render_reference`) of the same
 scene; points that differ only in what the reference ignores (``render.technique``, ``steps``,
 ``sampling``, ``resolution``, ``precision``, ``exposure``, the parameters of techniques other than
@@ -46,7 +46,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .cluster import After, Item, run_items
+from .work_items import After, Item, run_items
 from .errors import InputError
 from .io import output_dir, write_bytes, write_exr, write_text
 from .oracle.metrics import hdr_flip
@@ -160,7 +160,7 @@ def _point(scene, reference: dict, metrics: tuple[str, ...]) -> dict:
 
 
 def sweep_items(spec: SweepSpec):
-    """``(items, rows)``: the reference and point items (:class:`vlref.cluster.Item`) and, per point item,
+    """``(items, rows)``: the reference and point items (:class:`vlref.work_items.Item`) and, per point item,
     its summary row without metric values. Every scene is loaded here, so bad overrides fail before any
     work (``InputError`` naming the sweep file and the point)."""
     base = load_scene(spec.scene, spec.base)
@@ -212,7 +212,7 @@ def _parquet(rows: list[dict], columns: list[str]) -> bytes | None:
 
 
 def run_sweep(spec: SweepSpec, output, scheduler: str | None = None, quiet: bool = False) -> list[dict]:
-    """Run the sweep on ``scheduler`` (:func:`vlref.cluster.run_items`) into ``output``; returns the summary
+    """Run the sweep on ``scheduler`` (:func:`vlref.work_items.run_items`) into ``output``; returns the summary
     rows (dicts with the columns of ``summary.csv``, metric values as numbers)."""
     items, rows = sweep_items(spec)
     by_item = {row["item"]: row for row in rows}

@@ -5,7 +5,7 @@ Every command module holds ``HELP`` (its line in ``vlref --help``; None: not lis
 ``compare``/``golden verify``: 1 failed), which calls library functions that return values and raise
 :class:`vlref.errors.InputError` on bad input. :func:`main` parses, runs, and maps the outcome to the
 exit code: 2 and ``<prefix>: error: FILE: key: reason`` for bad input (nothing is written), the
-cluster's code for failed items (:class:`vlref.cluster.ItemsFailed`), 130 / 143 on SIGINT / SIGTERM.
+cluster's code for failed items (:class:`vlref.work_items.ItemsFailed`), 130 / 143 on SIGINT / SIGTERM.
 """
 
 from __future__ import annotations
@@ -18,7 +18,7 @@ import sys
 import threading
 
 from .. import __version__
-from ..cluster import ItemsFailed
+from ..work_items import ItemsFailed
 from ..errors import InputError
 
 __all__ = ["COMMANDS", "command", "build_parser", "main", "Interrupted"]

@@ -43,7 +43,7 @@ def add_scene_arguments(p: argparse.ArgumentParser, required: bool = False) -> N
 
 def add_scheduler_argument(p: argparse.ArgumentParser) -> None:
     """The ``--scheduler`` option shared by ``golden``, ``reference`` and ``sweep``
-    (:func:`vlref.cluster.parse_scheduler` reads it)."""
+    (:func:`vlref.work_items.parse_scheduler` reads it)."""
     p.add_argument("--scheduler", metavar="local[:N]|tcp://HOST:PORT",
                    help="run the independent items on Dask (pip install 'vlref[distributed]'): a "
                         "LocalCluster of N worker processes (default: one per core), or an existing "

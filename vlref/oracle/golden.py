@@ -41,7 +41,7 @@ from typing import Sequence
 import numpy as np
 
 from .. import __version__
-from ..cluster import Item, run_items
+from ..work_items import Item, run_items
 from ..errors import InputError
 from ..io import output_dir, read_image, write_exr, write_text
 from ..render import render, scene_hash, scene_settings_json
@@ -256,7 +256,7 @@ def build(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = N
 
     With ``only``, the other entries of an existing manifest are kept. Files of entries no longer in the
     suite are removed. All files are written atomically (:func:`vlref.io.output_dir`). Entries are
-    independent items rendered on ``scheduler`` (:func:`vlref.cluster.run_items`); the files and the
+    independent items rendered on ``scheduler`` (:func:`vlref.work_items.run_items`); the files and the
     manifest are the same bytes whatever the scheduler.
     """
     import numba
@@ -347,7 +347,7 @@ def verify(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = 
     """Check checksums, staleness and re-renders of the goldens in ``golden_dir`` (default
     :func:`find_golden_dir`; module docstring); one outcome per entry.
 
-    The re-renders are independent items run on ``scheduler`` (:func:`vlref.cluster.run_items`) and
+    The re-renders are independent items run on ``scheduler`` (:func:`vlref.work_items.run_items`) and
     compared here as they arrive; the outcomes are in entry-name order whatever the scheduler.
     """
     golden_dir = Path(golden_dir) if golden_dir is not None else find_golden_dir()

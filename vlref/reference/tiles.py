@@ -1,4 +1,4 @@
-"""The quadrature reference in tiles of rows, each an independent item (:mod:`vlref.cluster`).
+"""The quadrature reference in tiles of rows, each an independent item (:mod:`vlref.work_items`).
 
 Every pixel of :func:`vlref.reference.quadrature.render_reference` is solved on its own (its ray, its
 split points, its adaptive quadrature), so a tile ``render_reference(scene, rows=(y0, y1))`` equals
@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from ..cluster import Item, run_items
+from ..work_items import Item, run_items
 from .quadrature import DEFAULT_ABS_TOL, ReferenceResult, render_reference
 
 __all__ = ["tile_rows", "render_reference_tiled"]
@@ -30,7 +30,7 @@ def render_reference_tiled(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAUL
                            scheduler: str | None = None, rows_per_tile: int = 16, quiet: bool = False,
                            shadow_samples: int = 512, max_intervals: int = 4000) -> ReferenceResult:
     """:func:`render_reference` of ``scene`` solved in bands of ``rows_per_tile`` rows on ``scheduler``
-    (:func:`vlref.cluster.run_items`); the arrays equal the untiled result bit for bit. ``stats``:
+    (:func:`vlref.work_items.run_items`); the arrays equal the untiled result bit for bit. ``stats``:
     ``intervals`` and ``unconverged`` summed over the tiles, ``seconds`` the wall time, ``tiles``."""
     start = time.perf_counter()
     bands = tile_rows(scene.render.height, rows_per_tile)
