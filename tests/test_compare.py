@@ -1,6 +1,7 @@
 """vlref.oracle: metrics, the pass/fail rule and its boundaries, presets, masks, outputs, exit codes."""
 
 import base64
+import dataclasses
 import json
 import math
 import sys
@@ -370,3 +371,14 @@ def test_compare_command_exit_codes(tmp_path, capsys):
         assert main(["compare", *argv]) == 2, argv
         assert message in capsys.readouterr().err
     assert not (tmp_path / "missing.exr").exists()
+
+
+def test_every_number_knob_is_checked_from_the_class_alone():
+    """The knobs come from Tolerance's fields (no list beside it): each number refuses a negative value."""
+    base = dict(abs_tol=0.0, rel_tol=0.0, max_fail_fraction=0.0, max_mean_abs=0.0)
+    numbers = [f.name for f in dataclasses.fields(Tolerance) if f.type in ("float", "float | None")]
+    assert len(numbers) == 8
+    for key in numbers:
+        with pytest.raises(InputError) as exc:
+            Tolerance(**{**base, key: -1.0})
+        assert exc.value.path == key

@@ -69,8 +69,7 @@ class Tolerance:
         return self.abs_tol if self.edge_abs_tol is None else self.edge_abs_tol
 
     def __post_init__(self):
-        for key in ("abs_tol", "rel_tol", "max_fail_fraction", "max_mean_abs", "max_flip_mean", "edge_rel_tol",
-                    "edge_abs_tol", "max_mean_abs_all"):
+        for key in _NUMBERS:
             value = getattr(self, key)
             if value is None and key in _OPTIONAL:
                 continue
@@ -85,10 +84,15 @@ class Tolerance:
             raise InputError(_SOURCE, "scale", f"must be one of {', '.join(SCALES)}, got {self.scale!r}")
 
 
-_OPTIONAL = ("max_flip_mean", "edge_rel_tol", "edge_abs_tol", "max_mean_abs_all")
+_KNOBS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.name != "name")
+"""Every knob a preset or ``--set`` may give, read off :class:`Tolerance`'s fields (one list: the class)."""
+_NUMBERS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type in ("float", "float | None"))
+"""The knobs that are numbers >= 0."""
+_OPTIONAL = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type == "float | None")
 """Knobs that may be unset (``none``): no FLIP gate; the edge zone's tolerance = the base one; no mean-error
 bound over the edge zone too."""
-_KNOBS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.name != "name")
+_TEXT = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type == "str" and f.name != "name")
+"""Knobs that are text (``scale``, ``description``)."""
 
 
 def _suggest(word: str, options) -> str:
@@ -100,7 +104,7 @@ def _coerce(key: str, value) -> object:
     """A knob's value from TOML or from a ``--set key=value`` string."""
     if key not in _KNOBS:
         raise InputError(_SOURCE, key, "unknown tolerance key" + _suggest(key, _KNOBS))
-    if key in ("scale", "description"):
+    if key in _TEXT:
         return str(value)
     if key in _OPTIONAL and (value is None or str(value).strip().lower() in ("none", "off", "")):
         return None
