@@ -9,10 +9,10 @@ from pathlib import Path
 from typing import Sequence
 
 from ..errors import InputError
-from ..io import check_output_dir, check_output_file
 from ..oracle.compare import compare_files
 from ..oracle.junit import report_case, write_junit
 from ..oracle.metrics import FLIP_MISSING
+from .options import check_report_outputs
 
 HELP = "compare two images (exit 0 pass, 1 fail, 2 bad input)"
 CLI = "<command line>"
@@ -72,10 +72,7 @@ def _parse_set(items: Sequence[str] | None) -> dict[str, str]:
 
 def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
-    if args.output:
-        check_output_dir(args.output)
-    if args.junit:
-        check_output_file(args.junit, "--junit")
+    check_report_outputs(args.output, args.junit)
     _refuse_8bit(args)
     if args.border < 0:
         raise InputError(CLI, "--border", f"must be an integer >= 0, got {args.border}")

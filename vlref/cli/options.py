@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..io import check_output_dir, luminance, percentile_exposure
+from ..io import check_output_dir, check_output_file, luminance, percentile_exposure
 from ..memory import check_memory
 from ..scene import load_scene
 from ..scene.model import TECHNIQUES
@@ -39,6 +39,15 @@ def add_scene_arguments(p: argparse.ArgumentParser, required: bool = False) -> N
     p.add_argument("--ignore-memory-check", action="store_true",
                    help="render even when the estimated peak memory exceeds the available memory "
                         "(default: refuse, exit 2)")
+
+
+def check_report_outputs(output, junit) -> None:
+    """Before any work: the report folder ``-o`` (when given) and the JUnit file ``--junit`` (when given) can be
+    written (:func:`vlref.io.check_output_dir`, :func:`vlref.io.check_output_file`)."""
+    if output:
+        check_output_dir(output)
+    if junit:
+        check_output_file(junit, "--junit")
 
 
 def add_scheduler_argument(p: argparse.ArgumentParser) -> None:

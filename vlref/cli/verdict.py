@@ -7,9 +7,9 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..io import check_output_dir, check_output_file
 from ..oracle.junit import Case, write_junit
 from ..oracle.verdict import judge
+from .options import check_report_outputs
 
 HELP = "judge a port on its own buffers and against the scene (exit 0 pass, 1 fail, 2 bad input)"
 
@@ -33,10 +33,7 @@ def parser() -> argparse.ArgumentParser:
 
 def run(args) -> int:
     """0 pass, 1 fail; bad input raises :class:`InputError` (exit 2)."""
-    if args.output:
-        check_output_dir(args.output)
-    if args.junit:
-        check_output_file(args.junit, "--junit")
+    check_report_outputs(args.output, args.junit)
     verdict = judge(args.manifest, args.output, args.preset, args.set or ())
     if args.junit:
         write_junit(args.junit, "vlref verdict", [Case(f"{p.group}: {p.name}", p.passed, p.metrics, p.report, p.reason)
