@@ -33,7 +33,7 @@ from numba import njit
 
 from .primitives import hit_triangle
 
-__all__ = ["Bvh", "build_bvh", "build_box_bvh", "traversal_stack", "ray_box", "descend", "pop_nearer",
+__all__ = ["Bvh", "build_bvh", "build_box_bvh", "traversal_stack", "ray_box", "enter_root", "descend", "pop_nearer",
            "push_children", "next_leaf", "bvh_closest", "bvh_transmittance", "BINS", "SAH_DEPTH", "STACK", "DEDUP"]
 
 BINS = 16
@@ -275,6 +275,20 @@ def _inverse(d):
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
+def enter_root(node_min, node_max, ray, tmin, tmax, stack):
+    """The prologue of every traversal: ``(entered, ix, iy, iz, stack)``, whether ``ray = (ox, oy, oz, dx, dy,
+    dz)`` crosses the root box in ``(tmin, tmax)`` (False for an empty tree), its inverse direction (zero
+    components replaced by ``1e-300`` first, :func:`ray_box`) and the traversal scratch (``stack``, or a new
+    :func:`traversal_stack` when it is None)."""
+    ox, oy, oz, dx, dy, dz = ray
+    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
+    entered = node_min.shape[0] > 0 and ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF
+    if stack is None:
+        stack = traversal_stack()
+    return entered, ix, iy, iz, stack
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
 def descend(node_min, node_max, left, ox, oy, oz, ix, iy, iz, tmin, best, stack, stack_t, top):
     """Closest-hit traversal step at an interior node whose children are ``left``, ``left + 1``: returns
     ``(node, top)`` — the nearer child hit by the ray (the farther one pushed with its entry distance),
@@ -339,15 +353,11 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
     ``STACK`` (node, entry t) pairs (``stack``, see :func:`traversal_stack`) and skipped on pop when its
     entry is beyond the best hit.
     """
-    if node_first.shape[0] == 0:
+    entered, ix, iy, iz, stack = enter_root(node_min, node_max, ray, tmin, tmax, stack)
+    if not entered:
         return INF, -1
     ox, oy, oz, dx, dy, dz = ray
-    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
     best, found = tmax, -1
-    if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
-        return INF, -1
-    if stack is None:
-        stack = traversal_stack()
     nodes, stack_t = stack
     top, node = 0, 0
     while True:
@@ -391,20 +401,16 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
     crossings are remembered for that check.
     """
     tr, tg, tb = 1.0, 1.0, 1.0
-    if node_first.shape[0] == 0:
+    entered, ix, iy, iz, stack = enter_root(node_min, node_max, ray, tmin, tmax, stack)
+    if not entered:
         return tr, tg, tb
     ox, oy, oz, dx, dy, dz = ray
-    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    if stack is None:
-        stack = traversal_stack()
     nodes = stack[0]
     hit_obj = np.empty(DEDUP, dtype=np.int64)
     hit_t = np.empty(DEDUP)
     n_hits = 0
-    top = 0
-    if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF:
-        nodes[0] = 0
-        top = 1
+    nodes[0] = 0
+    top = 1
     while True:
         node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
                               nodes, top)

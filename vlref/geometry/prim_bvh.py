@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .bvh import Bvh, _inverse, build_box_bvh, descend, next_leaf, pop_nearer, ray_box, traversal_stack
+from .bvh import Bvh, build_box_bvh, descend, enter_root, next_leaf, pop_nearer
 from .primitives import hit_primitive
 
 __all__ = ["PRIM_PAD", "PRIM_LEAF", "build_primitive_bvh", "prims_closest", "prims_occluded"]
@@ -58,14 +58,10 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
     children skipped when their entry is beyond ``best``.
     The normal is the primitive's outward normal (not yet faced toward the origin).
     """
-    if node_first.shape[0] == 0:
+    entered, ix, iy, iz, stack = enter_root(node_min, node_max, ray, tmin, best, stack)
+    if not entered:
         return best, best_k, nx, ny, nz
     ox, oy, oz, dx, dy, dz = ray
-    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, best) == INF:
-        return best, best_k, nx, ny, nz
-    if stack is None:
-        stack = traversal_stack()
     nodes, stack_t = stack
     top, node = 0, 0
     while True:
@@ -90,14 +86,10 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
 def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, stack=None):
     """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``
     (any-hit traversal, early exit; ``stack`` as :func:`prims_closest`'s)."""
-    if node_first.shape[0] == 0:
+    entered, ix, iy, iz, stack = enter_root(node_min, node_max, ray, tmin, tmax, stack)
+    if not entered:
         return False
     ox, oy, oz, dx, dy, dz = ray
-    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    if ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) == INF:
-        return False
-    if stack is None:
-        stack = traversal_stack()
     nodes = stack[0]
     nodes[0] = 0
     top = 1
