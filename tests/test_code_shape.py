@@ -1,7 +1,7 @@
 """The shape of the code: small signatures, named light kinds, named columns, imports at the top.
 
 Kernels take records (:class:`vlref.lights.pack.PackedLights`, :class:`vlref.medium.PackedMedium`,
-:class:`vlref.lights.shadowmaps.ShadowTable`, the geometry arrays) rather than long lists of positional
+:class:`vlref.lights.shadow_pack.ShadowTable`, the geometry arrays) rather than long lists of positional
 arrays, compare light kinds with the ``KIND_*`` constants of :mod:`vlref.lights.pack`, never with
 digits, and read a record's columns by their names (``I_*``, ``F_*``, ``M_*``, ``S_*``), never by number.
 A module imports vlref's own modules at its top, where a reader sees its dependencies; a function imports
@@ -89,7 +89,7 @@ def _raw_columns(source: str) -> list[int]:
 
 
 def test_columns_are_read_by_name_outside_the_packing_modules():
-    packing = {PACKAGE / "lights" / "pack.py", PACKAGE / "medium.py", PACKAGE / "lights" / "shadowmaps.py"}
+    packing = {PACKAGE / "lights" / "pack.py", PACKAGE / "medium.py", PACKAGE / "lights" / "shadow_pack.py"}
     hits = [f"{path.relative_to(PACKAGE)}:{line}" for path in SOURCES if path not in packing
             for line in _raw_columns(path.read_text(encoding="utf-8"))]
     assert hits == []

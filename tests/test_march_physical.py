@@ -11,7 +11,7 @@ from hypothesis import given, settings, strategies as st
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
-from vlref.lights.shadowmaps import NSF, NSI, S_MODE, SHADOW_EXACT, ShadowMaps
+from vlref.lights.shadow_pack import NSF, NSI, SHADOW_EXACT, S_MODE, ShadowMaps
 from vlref.march import physical as physical_march
 from vlref.march.physical import TILE_H, TILE_W, march_physical
 from vlref.medium import M_ST, pack_medium

@@ -9,7 +9,8 @@ import pytest
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
-from vlref.lights.shadowmaps import build_shadow_maps, cascade_splits, shadow_visibility
+from vlref.lights.shadow_cast import build_shadow_maps, cascade_splits
+from vlref.lights.shadow_lookup import shadow_visibility
 from vlref.scene.model import (CameraSettings, Light, Material, Plane, Scene, ShadowSettings, Sphere)
 
 SPHERES = (((0.0, 1.5, 3.0), 0.6), ((2.5, 0.0, 0.0), 0.5), ((-2.0, 0.3, -1.0), 0.5), ((0.0, -2.2, 0.4), 0.6),
@@ -120,7 +121,7 @@ def test_transparent_occluder_colours_the_light_in_maps_and_exact_rays():
 @pytest.mark.parametrize("ortho", [False, True])
 def test_face_rays_are_the_texel_grid_construction(ortho):
     # the kernel builds each texel's ray itself; the bits are those of the array construction from texel_grid
-    from vlref.lights.shadowmaps import _face, _face_ray, texel_grid
+    from vlref.lights.shadow_cast import _face, _face_ray, texel_grid
 
     res, near, limit, scale = 5, 0.7, 12.0, 0.83
     origin, fwd = np.array([0.3, 2.0, -1.1]), np.array([0.48, -0.8, 0.36])

@@ -5,7 +5,7 @@ The package is laid out as the pipeline it computes::
     scene/      scene model, TOML/JSON loading and validation, bundled scenes, animation
     camera.py   view/projection matrices, pixel rays, depth conversions
     geometry/   primitives, OBJ meshes, BVH, ray casting of the G-buffer
-    lights/     light models, attenuation and cone laws, cookies, shadow maps
+    lights/     light models, attenuation and cone laws, cookies, shadow maps (record, casting, lookups, probes)
     medium.py   density: homogeneous, height fog, noise; optical depth; the Beer–Lambert step rules
     phase.py    the Henyey–Greenstein phase function
     march/      ray-march kernels: light-volume segments, sampling patterns, step loops

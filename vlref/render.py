@@ -38,7 +38,7 @@ from .camera import Camera, camera_from_settings
 from .geometry import build_geometry, raycast
 from .lights import pack_lights
 from .lights.shading import scene_colour
-from .lights.shadowmaps import build_shadow_maps
+from .lights.shadow_cast import build_shadow_maps
 from .scene.animation import scene_at
 from .scene.model import Scene
 from .techniques import APPLIES, FRAME_BUFFERS, TECHNIQUES, suitable_scenes
@@ -79,7 +79,7 @@ class Frame:
     """Everything the volumetric passes of one frame read, built once per render.
 
     ``history`` is the previous frame's temporal state (temporal techniques only). ``shadow_cache`` maps a
-    lookup filter (``None`` = each light's own) to its :class:`~vlref.lights.shadowmaps.ShadowMaps`; it
+    lookup filter (``None`` = each light's own) to its :class:`~vlref.lights.shadow_pack.ShadowMaps`; it
     fills on demand, or a port supplies its own maps (:func:`vlref.port.port_frame`). ``tick(name)``, when
     given, reports the on-demand shadow maps as a render stage (``"shadow maps"``) once they are built.
     """

@@ -42,7 +42,7 @@ import numpy as np
 from .camera import camera_from_settings
 from .geometry import build_geometry
 from .lights import pack_lights
-from .lights.shadowmaps import build_shadow_maps
+from .lights.shadow_cast import build_shadow_maps
 from .march.physical import march_physical
 from .processes import ignoring_sigint
 from .reference import render_reference

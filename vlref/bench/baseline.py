@@ -24,7 +24,7 @@ from numba import njit, prange
 
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_INV_RANGE2, F_PX, F_PY,
                            F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ)
-from ..lights.shadowmaps import S_OFFSET, S_RES, S_STRENGTH
+from ..lights.shadow_pack import S_OFFSET, S_RES, S_STRENGTH
 from ..march.segments import light_segment
 from ..medium import FOG_MAX_EXPONENT, M_FOG_BASE, M_FOG_K, M_G, M_SS, M_ST
 from ..phase import hg_array
@@ -59,7 +59,7 @@ def _fog_depth(mp, y0, dy, length):
 
 
 def _pcf(data, base, res, u, v, d_ref):
-    """2x2 bilinear comparison (:func:`vlref.lights.shadowmaps.map_lit` without a transparent layer)."""
+    """2x2 bilinear comparison (:func:`vlref.lights.shadow_lookup.map_lit` without a transparent layer)."""
     su, sv = u * res - 0.5, v * res - 0.5
     fu, fv = np.floor(su), np.floor(sv)
     wu, wv = su - fu, sv - fv

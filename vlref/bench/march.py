@@ -12,7 +12,7 @@ from numba import njit, prange
 
 from ..lights.pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY,
                            F_UZ)
-from ..lights.shadowmaps import S_OFFSET, S_RES
+from ..lights.shadow_pack import S_OFFSET, S_RES
 from ..march.patterns import offsets
 from ..march.segments import light_segment
 from ..medium import pack_medium

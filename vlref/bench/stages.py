@@ -10,7 +10,7 @@ import numpy as np
 from ..camera import camera_from_settings
 from ..geometry import build_geometry, raycast
 from ..lights import pack_lights
-from ..lights.shadowmaps import build_shadow_maps
+from ..lights.shadow_cast import build_shadow_maps
 from ..notebook import PreviewRenderer
 from ..post.blur import blur_hv, thesis_blur_pass
 from ..post.composite import composite_physical

@@ -9,7 +9,7 @@ frustum of one screen tile, cut into ``slices`` depth slices along linear eye de
   target (pixel centres at +0.5).
 * Slice boundaries ``z_0 .. z_D`` (:func:`slice_depths`): the blend of exponential and uniform
   distributions ``z_k = λ n (f/n)^{k/D} + (1 - λ)(n + (f - n) k/D)`` (the practical split scheme,
-  the same law as :func:`vlref.lights.shadowmaps.cascade_splits`) with ``n`` the camera's near plane,
+  the same law as :func:`vlref.lights.shadow_cast.cascade_splits`) with ``n`` the camera's near plane,
   ``f`` the grid's far depth and ``λ = depth_distribution`` (1: exponential, as Wronski and Hillaire;
   0: uniform), and then ``z_0 = 0``: the first slice reaches back to the eye, so the grid covers the
   whole ray ``[0, f]``. Inside a slice depth is linear in the slice coordinate: ``z(k + ξ) = z_k +

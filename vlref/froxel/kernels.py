@@ -8,7 +8,7 @@ Grid layout and slices: :mod:`vlref.froxel.grid`. Every kernel runs ``prange`` o
    through the jittered uv, at the jittered slice depth) it stores ``(S_r, S_g, S_b, σt)`` with
    ``S = σs(x) Σ_l p(d·l) V_l(x) T_l(x) E_l(x)`` (radiance per metre) exactly as the physical march
    evaluates its source (:mod:`vlref.march.physical`: :func:`vlref.lights.shading.light_incidence`,
-   :func:`vlref.lights.shadowmaps.shadow_visibility` with each light's own filter, HG with ``d`` the
+   :func:`vlref.lights.shadow_lookup.shadow_visibility` with each light's own filter, HG with ``d`` the
    column's ray, the light leg ``T_l`` of ``light_extinction`` by :func:`vlref.medium.light_leg_attenuates`).
 2. :func:`froxel_integrate` (Hillaire 2015, slides 27-28): along each column's *centre* ray, slice
    ``k`` has length ``Δ_k = (z_{k+1} - z_k)/(d·f)`` (``f`` the camera forward); with ``S, σt`` of the
@@ -32,7 +32,7 @@ from numba import njit, prange
 
 from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shading import light_incidence
-from ..lights.shadowmaps import shadow_visibility
+from ..lights.shadow_lookup import shadow_visibility
 from ..medium import M_G, M_SS, M_ST, density, light_leg_attenuates, optical_depth, step_source_weight
 from ..phase import hg
 from .grid import depth_to_slice
@@ -45,7 +45,7 @@ def in_scattering(medium, lights, shadows, geo, x, y, z, dx, dy, dz, light_extin
     """``(S_r, S_g, S_b, σt)`` at world point ``x`` seen along unit direction ``d`` (module docstring, pass 1).
 
     ``medium``, ``lights``, ``shadows``: the packed records of :mod:`vlref.medium`, :mod:`vlref.lights.pack`
-    and :mod:`vlref.lights.shadowmaps`."""
+    and :mod:`vlref.lights.shadow_pack`."""
     mp, lattice = medium.params, medium.noise
     li, lf = lights.ints, lights.floats
     rho = density(mp, lattice, x, y, z)

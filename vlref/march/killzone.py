@@ -10,7 +10,7 @@ diffuse surface facing the light" (Vos) by the light's own code:
     T_{i+1} = T_i · exp(-σt(x_i) Δ),     T_0 = exp(-τ(0, t_0))
 
 ``E_l`` is :func:`vlref.lights.shading.light_incidence` (attenuation, cone, cookie), ``V_l`` ONE
-shadow-map lookup (:func:`vlref.lights.shadowmaps.shadow_visibility`, filter chosen by the
+shadow-map lookup (:func:`vlref.lights.shadow_lookup.shadow_visibility`, filter chosen by the
 technique), ``T`` the Beer-Lambert transmittance from the camera (thesis eq. 2.2), exact for a
 homogeneous medium (``T_i = exp(-σt t_i)``); ``T ≡ 1`` when the transmittance is off (Vos).
 """
@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..lights.shading import light_incidence
-from ..lights.shadowmaps import shadow_visibility
+from ..lights.shadow_lookup import shadow_visibility
 from ..lights.pack import I_KIND
 from ..medium import M_G, M_SS, M_ST, density, optical_depth
 from .segments import light_segment
@@ -41,7 +41,7 @@ def kz_march(cam, dirs, seg_a, seg_b, beta, n_steps, light, lights, medium, shad
 
     cam (3,); dirs (h, w, 3) unit rays; seg_a, seg_b (h, w) the segment (empty when ``b <= a``);
     beta (h, w) offsets in [0, 1); ``lights``, ``medium`` (its anisotropy ``g`` included) and ``shadows``
-    the packed records (:mod:`vlref.lights.pack`, :mod:`vlref.medium`, :mod:`vlref.lights.shadowmaps`).
+    the packed records (:mod:`vlref.lights.pack`, :mod:`vlref.medium`, :mod:`vlref.lights.shadow_pack`).
     """
     mp, lattice = medium.params, medium.noise
     lf = lights.floats

@@ -109,8 +109,8 @@ from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_D
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
 from ..lights.shading import cookie_rgb, light_vector
-from ..lights.shadowmaps import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, S_OFFSET, S_RES, S_STRENGTH,
-                                 apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords)
+from ..lights.shadow_lookup import apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords
+from ..lights.shadow_pack import SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, S_OFFSET, S_RES, S_STRENGTH
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
@@ -360,7 +360,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
     scatters light, 1 elsewhere. A spot light's PCF map without a transparent layer: map coordinates, the
     four depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
-    :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
+    :func:`~vlref.lights.shadow_lookup.map_lit` or a shadow ray, lane by lane."""
     prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
     mode = shadows.ints[k, S_MODE]
@@ -530,7 +530,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
-    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadowmaps.ShadowTable`;
+    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadow_pack.ShadowTable`;
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").

@@ -36,7 +36,7 @@ from ..lights.cookies import sample_texture, spot_cookie_uv
 from ..lights.pack import (F_CR, F_COS_INNER, F_COS_OUTER, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX,
                            F_UY, F_UZ, KIND_DIRECTIONAL, KIND_POINT)
-from ..lights.shadowmaps import shadow_visibility
+from ..lights.shadow_lookup import shadow_visibility
 from ..medium import M_G, density
 from ..phase import hg
 from .patterns import bayer_matrix
@@ -177,7 +177,7 @@ def vl_march(cam, dirs, t0, length, covered, beta, march, light, medium, lights,
     term is then <= 0 and the max(0, .) clamps to 0, quirk 16); covered (h, w) bool, the light
     volume's raster coverage; beta (h, w) dither offsets; ``march`` a :class:`VlMarch`, ``light`` a
     :class:`VlLight`; ``medium`` the density's :class:`~vlref.medium.PackedMedium`, ``lights`` the frame's
-    packed lights and ``shadows`` its :class:`~vlref.lights.shadowmaps.ShadowTable` (shadow lookups).
+    packed lights and ``shadows`` its :class:`~vlref.lights.shadow_pack.ShadowTable` (shadow lookups).
     Returns ``rgb`` (h, w, 3) and ``tau`` (h, w).
     """
     n_steps, sigma_s, sigma_t, right_endpoint, half_tau = march

@@ -21,7 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..lights.pack import KIND_DIRECTIONAL
-from ..lights.shadowmaps import shadow_visibility
+from ..lights.shadow_lookup import shadow_visibility
 from ..phase import hg
 
 __all__ = ["urp_hash", "urp_march", "HASH_A", "HASH_B", "HASH_K"]
@@ -49,7 +49,7 @@ def urp_march(cam, dirs, length, rand, n_steps, jitter, g, toward, shadows, geo,
     """The fog ``F`` (h, w) of the module docstring, prange over pixels.
 
     dirs (h, w, 3) unit rays; length (h, w) the clamped ray length ``L``; rand (h, w) the hash;
-    toward (3,) the unit vector toward the light (minus its forward vector); ``shadows`` the :class:`~vlref.lights.shadowmaps.ShadowTable`, ``lf``
+    toward (3,) the unit vector toward the light (minus its forward vector); ``shadows`` the :class:`~vlref.lights.shadow_pack.ShadowTable`, ``lf``
     the packed light floats, ``light`` the light's index.
     """
     h, w = length.shape

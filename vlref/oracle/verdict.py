@@ -13,7 +13,7 @@ A port passes only when two judgments pass:
                           ``1/z`` (sky = 0, so a sky / surface mismatch fails; relative errors equal);
   ``shadow_map[light=i]`` each texel of its maps against vlref's map rendered through the *port's* texel
                           rays (its light matrices, :func:`vlref.port.decode.tile_rays`): the biased distance
-                          along the ray (:func:`vlref.lights.shadowmaps.cast_rays`), as inverse distance
+                          along the ray (:func:`vlref.lights.shadow_probes.cast_rays`), as inverse distance
                           (empty = 0);
   ``shadow_test[light=i]`` the lit fraction its maps give at the scene's visible surface points the light
                           reaches (inside its range and cone) against vlref's maps' (the decision a map
@@ -58,7 +58,8 @@ from ..errors import InputError
 from ..io import output_dir, write_text
 from ..lights import pack_lights
 from ..lights.pack import I_KIND
-from ..lights.shadowmaps import SHADOW_HARD, SHADOW_PCF, ShadowMaps, cast_rays, lit_at_points
+from ..lights.shadow_pack import SHADOW_HARD, SHADOW_PCF, ShadowMaps
+from ..lights.shadow_probes import cast_rays, lit_at_points
 from ..port import load_port, port_frame
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
 from ..render import prepare_frame, scene_hash

@@ -55,7 +55,7 @@ Decoding (float64):
   texel's ray at view depth ``|z| = value``; ``distance``: the point at that distance along the texel's
   ray from the eye (perspective) or from the view plane ``z = 0`` (orthographic). A texel holding the
   far-plane value (raw) or a non-finite value is empty (``inf``: lit).
-* vlref's packing (:mod:`vlref.lights.shadowmaps`, :mod:`.shadows`): each vlref texel takes the port texel its centre ray
+* vlref's packing (:mod:`vlref.lights.shadow_pack`, :mod:`.shadows`): each vlref texel takes the port texel its centre ray
   projects into (nearest); spot/point store ``|P - light|``; cascade ``k`` stores ``(P - c_k)·forward +
   back_k`` with ``(c_k, r_k)`` the bounding sphere of the camera's frustum slice between ``splits[k]``
   and ``splits[k+1]`` (vlref's cascade selection) and ``back_k`` the distance from the tile's near plane

@@ -10,7 +10,7 @@ import numpy as np
 
 from ..camera import DEPTH_CONVENTIONS, Camera, raw_to_linear
 from ..errors import InputError
-from ..lights.shadowmaps import texel_grid
+from ..lights.shadow_cast import texel_grid
 
 __all__ = ["NEAR_VALUE", "FAR_VALUE", "CUBE_ORDER", "SHADOW_CONVENTIONS", "PortTile", "PortShadowMap",
            "decode_depth", "flip_z", "camera_from_matrices", "tile_rays", "tile_points", "nearest_texel"]

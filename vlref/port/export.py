@@ -12,7 +12,8 @@ import numpy as np
 
 from ..camera import Camera, linear_to_raw, look_rotation
 from ..io import output_dir, write_exr, write_text
-from ..lights.shadowmaps import CUBE_FACES, SHADOW_EXACT, SHADOW_NONE, cascade_splits, texel_grid
+from ..lights.shadow_cast import cascade_splits, texel_grid
+from ..lights.shadow_pack import CUBE_FACES, SHADOW_EXACT, SHADOW_NONE
 from ..render import prepare_frame
 from ..scene import load_scene
 from ..techniques import TECHNIQUES

@@ -1,8 +1,8 @@
-"""A port's shadow maps resampled into vlref's :class:`~vlref.lights.shadowmaps.ShadowMaps`.
+"""A port's shadow maps resampled into vlref's :class:`~vlref.lights.shadow_pack.ShadowMaps`.
 
 Each vlref texel takes the port texel its centre ray projects into (nearest); spot and point maps store
 ``|P - light|``, cascade ``k`` stores ``(P - c_k)·forward + back_k`` (the rules in :mod:`vlref.port`).
-Packing goes through :func:`vlref.lights.shadowmaps.pack_shadow_maps`; the light frames are the scene's
+Packing goes through :func:`vlref.lights.shadow_pack.pack_shadow_maps`; the light frames are the scene's
 (``look_rotation(direction)``, as :mod:`vlref.lights.pack` builds them).
 """
 
@@ -15,8 +15,8 @@ import numpy as np
 
 from ..camera import Camera, look_rotation
 from ..errors import InputError
-from ..lights.shadowmaps import (CUBE_FACES, MAX_CASCADES, SHADOW_HARD, SHADOW_PCF, LightMaps, cascade_sphere,
-                                 pack_shadow_maps, texel_grid)
+from ..lights.shadow_cast import cascade_sphere, texel_grid
+from ..lights.shadow_pack import CUBE_FACES, MAX_CASCADES, SHADOW_HARD, SHADOW_PCF, LightMaps, pack_shadow_maps
 from .decode import CUBE_ORDER, PortShadowMap, nearest_texel, tile_points
 
 __all__ = ["shadow_maps_from_port"]

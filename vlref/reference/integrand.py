@@ -41,7 +41,7 @@ from numba import njit
 from ..geometry import shadow_transmittance
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
-from ..lights.shadowmaps import apply_strength
+from ..lights.shadow_lookup import apply_strength
 from ..medium import (FOG_MAX_EXPONENT, M_FOG, M_FOG_BASE, M_FOG_K, M_G, M_NINT, M_NOFF, M_NOISE, M_NSCALE,
                       M_NSX, M_NSY, M_NSZ, M_ST, PackedMedium, clip_to_bounds, density, noise_value, pack_medium,
                       sigma)

@@ -36,7 +36,7 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     """Run the physical march on explicit inputs: ``(per_light (n,H,W,3), transmittance (H,W))``.
 
     ``gbuffer_distance`` (H, W) distance along each pixel ray (``inf`` = sky); ``lights`` a
-    :class:`vlref.lights.PackedLights`, ``shadow_maps`` a :class:`vlref.lights.shadowmaps.ShadowMaps`.
+    :class:`vlref.lights.PackedLights`, ``shadow_maps`` a :class:`vlref.lights.shadow_pack.ShadowMaps`.
     """
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     h, w = gbuffer_distance.shape

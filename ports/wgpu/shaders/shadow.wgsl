@@ -1,5 +1,5 @@
 // Pass 2: one shadow tile (spot map or cube face) into a depth32float layer, reversed-Z.
-// Bias is applied caster-side along the texel's ray (vlref/lights/shadowmaps.py): the depth written is
+// Bias is applied caster-side along the texel's ray (vlref/lights/shadow_cast.py): the depth written is
 // that of the point at radial distance r + bias + slope_bias * min(tan a, 10) on the same ray.
 struct Tile {
     view_proj: mat4x4f,
