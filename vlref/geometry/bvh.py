@@ -341,7 +341,7 @@ def next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz
     return -1, top
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, opaque_only, ray, tmin, tmax,
                 stack=None):
     """Closest triangle hit in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``: ``(t, i)`` (``i`` in

@@ -46,7 +46,7 @@ def build_primitive_bvh(box_min: np.ndarray, box_max: np.ndarray) -> Bvh:
     return build_box_bvh(lo, hi, 0.5 * (lo + hi), PRIM_LEAF, PRIM_PAD)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, best, best_k,
                   nx, ny, nz, stack=None):
     """Merge the closest primitive hit of ``ray = (ox, oy, oz, dx, dy, dz)`` into ``(best, best_k, nx, ny, nz)``

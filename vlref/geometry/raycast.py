@@ -8,8 +8,8 @@ act on light through :func:`vlref.geometry.shadow_transmittance`).
 Per pixel with a hit at distance ``t`` on object ``k``: ``distance = t``, ``depth = t dot(d, f)``
 (linear eye depth, the view-space z), ``position = o + t d``, ``normal`` the unit normal facing
 the camera, ``albedo``/``emission`` of object ``k``, ``object_id = k``. Sky pixels: ``depth`` and
-``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (prange over rows, each
-row's rays cast together by :func:`~vlref.geometry.scene_geometry.closest_hits`),
+``distance`` are ``inf``, ``object_id = -1``, every other buffer 0. Pixels are independent (rows handed out to the
+threads on demand, each row's rays cast together by :func:`~vlref.geometry.scene_geometry.closest_hits`),
 so the buffers are bit-identical for any thread count.
 """
 
@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
+from ..parallel import WORKERS, borrowed, take
 from ..scene.model import Scene
 from .bvh import traversal_stack
 from .scene_geometry import Geometry, build_geometry, closest_hits
@@ -46,24 +47,28 @@ class GBuffer:
         return self.object_id >= 0
 
 
-@njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
-                    object_id):
+@njit(cache=True, fastmath=False)
+def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
+               object_id):
+    """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
+    (:func:`closest_hits`), then its G-buffer pixels written (module docstring)."""
     h, w = depth.shape
     ox, oy, oz = origin[0], origin[1], origin[2]
-    for y in prange(h):
-        origins = np.empty((w, 3))
-        cos_f = np.empty(w)
-        tmax = np.empty(w)
-        for x in range(w):
-            origins[x, 0], origins[x, 1], origins[x, 2] = ox, oy, oz
+    obj_albedo, obj_emission = geo.albedo, geo.emission
+    origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
+    t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
+    stack = traversal_stack()
+    for x in range(w):
+        origins[x, 0], origins[x, 1], origins[x, 2] = ox, oy, oz
+    while True:
+        y = take(taken)
+        if y >= h:
+            return
+        for x in range(w):  # the ray's end on the far plane
             cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
             tmax[x] = far / cos_f[x]
-        t_row = np.empty(w)
-        obj_row = np.empty(w, dtype=np.int64)
-        n_row = np.empty((w, 3))
-        closest_hits(geo, origins, dirs[y], tmax, True, traversal_stack(), t_row, obj_row, n_row)
-        for x in range(w):
+        closest_hits(geo, origins, dirs[y], tmax, True, stack, t_row, obj_row, n_row)
+        for x in range(w):  # the surface each ray sees
             dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
             t, obj = t_row[x], obj_row[x]
             object_id[y, x] = obj
@@ -76,8 +81,21 @@ def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, 
             position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
             normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_row[x, 0], n_row[x, 1], n_row[x, 2]
             for c in range(3):
-                albedo[y, x, c] = geo.albedo[obj, c]
-                emission[y, x, c] = geo.emission[obj, c]
+                albedo[y, x, c] = obj_albedo[obj, c]
+                emission[y, x, c] = obj_emission[obj, c]
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
+                    object_id):
+    """The G-buffer, rows handed out on demand to every thread (sky rows cost next to nothing, so ``prange``'s
+    equal blocks would leave threads idle); the workers get the arrays without reference counts
+    (:func:`vlref.parallel.borrowed`)."""
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        g, o, d, f, db, ds, p, n, a, e, ids = borrowed((geo, origin, dirs, forward, depth, distance, position, normal,
+                                                        albedo, emission, object_id))
+        _cast_rows(taken, g, o, d, f, far, db, ds, p, n, a, e, ids)
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,

@@ -48,6 +48,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit, prange
 
+from ..parallel import borrowed
 from ..scene.model import Box, Mesh, Plane, Scene, Sphere
 from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance, traversal_stack
 from .prim_bvh import build_primitive_bvh, prims_closest, prims_occluded
@@ -177,7 +178,7 @@ def build_geometry(scene: Scene) -> Geometry:
     return Geometry(arrays, bvh, lo, hi, prim_bvh)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def _closest(lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_first, pnode_count, pnode_prims,
              node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
              ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack):
@@ -231,6 +232,7 @@ def closest_hits(geo, origins, dirs, tmax, opaque_only, stack, t_out, obj_out, n
     (atomic, shared by every thread), measured at ~200 ns of a ray's ~350 ns on one thread (BENCHMARKS.md,
     "Whole frame"). Kernels call it on a row or chunk of rays with a row or chunk of scratch.
     """
+    geo = borrowed(geo)
     lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
     pnode_min, pnode_max, pnode_first = geo.pnode_min, geo.pnode_max, geo.pnode_first
     pnode_count, pnode_prims = geo.pnode_count, geo.pnode_prims

@@ -21,6 +21,7 @@ from numba import njit, prange
 
 from ..camera import Camera
 from ..geometry import RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
+from ..parallel import WORKERS, borrowed, take
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_POINT, KIND_SPOT, PackedLights)
 from .shadow_pack import (CUBE_AXES, CUBE_FACES, FILTER_MODES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
@@ -85,34 +86,53 @@ def _face_ray(face, ortho, res, k):
             start, max(face[FACE_LIMIT] - start, 0.0))
 
 
-@njit(cache=True, fastmath=False, parallel=True)
-def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
-    """Per texel of one face (:func:`_face_ray`): biased distance ``start + t`` to the first opaque hit (inf if
-    none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour."""
+@njit(cache=True, fastmath=False)
+def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
+    """Chunks of ``RAY_CHUNK`` texels of one face taken one at a time (:func:`vlref.parallel.take`) until none is
+    left: each texel's ray (:func:`_face_ray`), the chunk's first opaque hits (:func:`closest_hits`) stored as
+    biased distances; with ``want_tint`` the first transparent surface in front of that hit and the colour of
+    every transparent crossing before it (:func:`shadow_transmittance`)."""
     n = res * res
-    for chunk in prange((n + RAY_CHUNK - 1) // RAY_CHUNK):
-        s, e = chunk * RAY_CHUNK, min(n, (chunk + 1) * RAY_CHUNK)
-        m = e - s
-        origins, dirs, start, tmax = np.empty((m, 3)), np.empty((m, 3)), np.empty(m), np.empty(m)
+    origins, dirs, start, tmax = np.empty((RAY_CHUNK, 3)), np.empty((RAY_CHUNK, 3)), np.empty(RAY_CHUNK), np.empty(
+        RAY_CHUNK)
+    t, obj, normal = np.empty(RAY_CHUNK), np.empty(RAY_CHUNK, dtype=np.int64), np.empty((RAY_CHUNK, 3))
+    end, tt, tobj = np.empty(RAY_CHUNK), np.empty(RAY_CHUNK), np.empty(RAY_CHUNK, dtype=np.int64)
+    stack = traversal_stack()
+    while True:
+        s = take(taken) * RAY_CHUNK
+        if s >= n:
+            return
+        m = min(n - s, RAY_CHUNK)
         for j in range(m):
             (origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0], dirs[j, 1], dirs[j, 2], start[j],
              tmax[j]) = _face_ray(face, ortho, res, s + j)
-        stack = traversal_stack()
-        t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
-        closest_hits(geo, origins, dirs, tmax, True, stack, t, obj, normal)
-        biased_distances(t, obj, normal, dirs, start, bias, slope_bias, out[s:e])
-        if want_tint:
-            end = np.minimum(t, tmax)
-            tt, tobj = np.empty(m), np.empty(m, dtype=np.int64)
-            closest_hits(geo, origins, dirs, end, False, stack, tt, tobj, normal)
-            for j in range(m):
-                k = s + j
-                if tobj[j] < 0:
-                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
-                else:
-                    r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
-                                                   dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
-                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
+        closest_hits(geo, origins[:m], dirs[:m], tmax[:m], True, stack, t[:m], obj[:m], normal[:m])
+        biased_distances(t[:m], obj[:m], normal[:m], dirs[:m], start[:m], bias, slope_bias, out[s:s + m])
+        if not want_tint:
+            continue
+        for j in range(m):
+            end[j] = min(t[j], tmax[j])
+        closest_hits(geo, origins[:m], dirs[:m], end[:m], False, stack, tt[:m], tobj[:m], normal[:m])
+        for j in range(m):
+            k = s + j
+            if tobj[j] < 0:
+                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+            else:
+                r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
+                                               dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
+                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
+    """Per texel of one face (:func:`_face_ray`): biased distance ``start + t`` to the first opaque hit (inf if
+    none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour.
+    Chunks are handed out on demand (texels that see nothing cost little, so ``prange``'s equal blocks would
+    leave threads idle); the workers get the arrays without reference counts (:func:`vlref.parallel.borrowed`)."""
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        g, f, o, t = borrowed((geo, face, out, tint))
+        _cast_chunks(taken, g, f, ortho, res, bias, slope_bias, want_tint, o, t)
 
 
 @njit(cache=True, fastmath=False)
