@@ -4,9 +4,10 @@ of each part of the cast on the bench scene (b), one thread or all, so that shar
     NUMBA_NUM_THREADS=1 PYTHONPATH=$PWD python3 benchmarks/ray_profile.py [WIDTH HEIGHT SHADOW_RES]
 
 Rows: the whole ``raycast`` (buffers allocated, as the bench measures it), its kernel on buffers allocated once,
-``closest_hits`` alone (no G-buffer writes), and the three parts of a closest hit: the linear list (the plane),
-the primitive BVH, the triangle BVH (empty in (b)); then ``build_shadow_maps`` per texel. Wall and CPU time
-(``time.process_time``, all threads summed) per ray, medians of 5.
+``closest_hits`` alone (no G-buffer writes), and the three parts of a closest hit each called on its own, on
+borrowed arrays (:func:`vlref.parallel.borrowed`): the linear list (the plane), the primitive BVH, the triangle
+BVH (empty in (b)); then ``build_shadow_maps`` per texel. Wall and CPU time (``time.process_time``, all threads
+summed) per ray, medians of 5.
 """
 
 import sys
@@ -24,6 +25,7 @@ from vlref.geometry.primitives import hit_primitive
 from vlref.geometry.raycast import GBuffer, _raycast_kernel
 from vlref.lights import pack_lights
 from vlref.lights.shadow_cast import build_shadow_maps
+from vlref.parallel import borrowed
 
 
 @njit(cache=True, parallel=True)
@@ -45,6 +47,7 @@ def _part(geo, origin, dirs, tmax, part):
     """One part of the closest hit per ray: 0 the linear list, 1 the primitive BVH, 2 the triangle BVH."""
     h, w = dirs.shape[0], dirs.shape[1]
     out = np.zeros(h)
+    geo = borrowed(geo)
     lin, kind, row = geo.lin_prims, geo.prim_kind, geo.prim_row
     pmin, pmax, pfirst, pcount, pprims = geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims
     nmin, nmax, nfirst, ncount = geo.node_min, geo.node_max, geo.node_first, geo.node_count

@@ -53,6 +53,9 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
     (:func:`closest_hits`), then its G-buffer pixels written (module docstring)."""
     h, w = depth.shape
+    y = take(taken)
+    if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
+        return
     ox, oy, oz = origin[0], origin[1], origin[2]
     obj_albedo, obj_emission = geo.albedo, geo.emission
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
@@ -60,10 +63,7 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
     stack = traversal_stack()
     for x in range(w):
         origins[x, 0], origins[x, 1], origins[x, 2] = ox, oy, oz
-    while True:
-        y = take(taken)
-        if y >= h:
-            return
+    while y < h:
         for x in range(w):  # the ray's end on the far plane
             cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
             tmax[x] = far / cos_f[x]
@@ -83,6 +83,7 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
             for c in range(3):
                 albedo[y, x, c] = obj_albedo[obj, c]
                 emission[y, x, c] = obj_emission[obj, c]
+        y = take(taken)
 
 
 @njit(cache=True, fastmath=False, parallel=True)

@@ -93,34 +93,34 @@ def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out,
     biased distances; with ``want_tint`` the first transparent surface in front of that hit and the colour of
     every transparent crossing before it (:func:`shadow_transmittance`)."""
     n = res * res
+    s = take(taken) * RAY_CHUNK
+    if s >= n:  # before any allocation: most of the WORKERS iterations find no chunk left
+        return
     origins, dirs, start, tmax = np.empty((RAY_CHUNK, 3)), np.empty((RAY_CHUNK, 3)), np.empty(RAY_CHUNK), np.empty(
         RAY_CHUNK)
     t, obj, normal = np.empty(RAY_CHUNK), np.empty(RAY_CHUNK, dtype=np.int64), np.empty((RAY_CHUNK, 3))
     end, tt, tobj = np.empty(RAY_CHUNK), np.empty(RAY_CHUNK), np.empty(RAY_CHUNK, dtype=np.int64)
     stack = traversal_stack()
-    while True:
-        s = take(taken) * RAY_CHUNK
-        if s >= n:
-            return
+    while s < n:
         m = min(n - s, RAY_CHUNK)
         for j in range(m):
             (origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0], dirs[j, 1], dirs[j, 2], start[j],
              tmax[j]) = _face_ray(face, ortho, res, s + j)
         closest_hits(geo, origins[:m], dirs[:m], tmax[:m], True, stack, t[:m], obj[:m], normal[:m])
         biased_distances(t[:m], obj[:m], normal[:m], dirs[:m], start[:m], bias, slope_bias, out[s:s + m])
-        if not want_tint:
-            continue
-        for j in range(m):
-            end[j] = min(t[j], tmax[j])
-        closest_hits(geo, origins[:m], dirs[:m], end[:m], False, stack, tt[:m], tobj[:m], normal[:m])
-        for j in range(m):
-            k = s + j
-            if tobj[j] < 0:
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
-            else:
-                r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
-                                               dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
-                tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
+        if want_tint:
+            for j in range(m):
+                end[j] = min(t[j], tmax[j])
+            closest_hits(geo, origins[:m], dirs[:m], end[:m], False, stack, tt[:m], tobj[:m], normal[:m])
+            for j in range(m):
+                k = s + j
+                if tobj[j] < 0:
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = np.inf, 1.0, 1.0, 1.0
+                else:
+                    r, g, b = shadow_transmittance(geo, origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0],
+                                                   dirs[j, 1], dirs[j, 2], end[j] * (1.0 - 1e-9), stack)
+                    tint[k, 0], tint[k, 1], tint[k, 2], tint[k, 3] = start[j] + tt[j] + bias, r, g, b
+        s = take(taken) * RAY_CHUNK
 
 
 @njit(cache=True, fastmath=False, parallel=True)
