@@ -77,7 +77,8 @@ def main(width=480, height=270, res=512):
     packed = pack_lights(scene)
     texels = build_shadow_maps(scene, camera, geometry, packed).data.size
     wall, cpu = timed(lambda: build_shadow_maps(scene, camera, geometry, packed))
-    print(f"{'build_shadow_maps per texel':34s} {wall / texels * 1e9:8.1f} {cpu / texels * 1e9:8.1f}  ({texels} texels)")
+    name = "build_shadow_maps per texel"
+    print(f"{name:34s} {wall / texels * 1e9:8.1f} {cpu / texels * 1e9:8.1f}  ({texels} texels)")
 
 
 if __name__ == "__main__":
