@@ -44,7 +44,7 @@ from .geometry import build_geometry
 from .lights import pack_lights
 from .lights.shadowmaps import build_shadow_maps
 from .march.physical import march_physical
-from .processes import ignoring_sigint
+from .processes import host_cores, ignoring_sigint
 from .reference import render_reference
 from .render import prepare_frame, render
 from .scene import load_scene
@@ -107,7 +107,7 @@ def warmup(jobs: int | None = None, progress=None) -> dict[str, float]:
     """Run every task of :data:`TASKS` (``frame`` first, the rest on ``jobs`` processes, default: the
     available cores); ``progress(name)`` after each. Returns ``{task: seconds in its process}``."""
     if not jobs:
-        jobs = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        jobs = host_cores()
     progress = progress or (lambda name: None)
     times = {}
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
@@ -181,7 +181,7 @@ def march_ahead(scene) -> Iterator[Callable[[], None]]:
     which waits for it (call it before the march: :class:`vlref.render.Frame` ticks ``"shadow maps"`` just
     before). A no-op for other techniques, a cached kernel or one core. The process is terminated when the
     block exits early (an error, an interrupt)."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    cores = host_cores()
     if scene.render.technique != "physical" or cores < 2 or march_cached(scene):
         yield lambda: None
         return

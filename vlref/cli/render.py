@@ -9,7 +9,11 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from ..io import output_dir, png_bytes, save_render, srgb8, write_bytes
+from ..io.files import write_bytes
+from ..io.output_folders import output_dir
+from ..io.png import png_bytes
+from ..io.render_files import save_render
+from ..io.tonemap import srgb8
 from ..render import render
 from ..sequence import parse_frames, write_sequence
 from ..sheet import contact_sheet, inscatter_level, labelled
