@@ -215,6 +215,23 @@ def test_golden_only_that_matches_nothing_is_bad_input(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []  # build wrote nothing
 
 
+def test_the_program_freezes_its_objects_out_of_the_collectors_sight_and_a_call_does_not(capsys, monkeypatch):
+    """``vlref`` as a program (argv None) freezes the objects of its imports and of its run (gc.freeze), so
+    the exit does not collect them again; a call from Python (argv given) leaves the collector alone."""
+    import gc
+
+    from vlref.cli import main
+
+    gc.unfreeze()
+    try:
+        assert main(["scenes"]) == 0 and gc.get_freeze_count() == 0
+        monkeypatch.setattr(sys, "argv", ["vlref", "scenes"])
+        assert main() == 0 and gc.get_freeze_count() > 10_000
+    finally:
+        gc.unfreeze()
+    capsys.readouterr()
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene

@@ -14,7 +14,7 @@ from hypothesis.extra import numpy as hnp
 
 from vlref import __version__
 from vlref.errors import InputError
-from vlref.io.exr import _openexr, read_exr, write_exr
+from vlref.io.exr import openexr, read_exr, write_exr
 from vlref.io.files import write_npy, write_npz, write_text
 from vlref.io.images import read_image
 from vlref.io.output_folders import output_dir
@@ -311,7 +311,13 @@ def test_save_buffers_and_save_render(tmp_path):
     buffers = {"final": rng.random((4, 6, 3)), "depth": np.where(rng.random((4, 6)) < 0.3, np.inf, 5.0),
                "object_id": np.full((4, 6), -1, np.int32)}
     paths = save_buffers(tmp_path, buffers, {"scene_hash": "h"})
-    assert sorted(p.name for p in paths) == ["depth.exr", "final.exr", "object_id.exr"]
+    assert [p.name for p in paths] == ["final.exr", "depth.exr", "object_id.exr"]  # the buffers' order
+    # written at once on threads, each file holds the bytes write_exr writes alone
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    for name, array in buffers.items():
+        write_exr(alone / f"{name}.exr", array, metadata={"scene_hash": "h"})
+        assert (alone / f"{name}.exr").read_bytes() == (tmp_path / f"{name}.exr").read_bytes(), name
     np.testing.assert_array_equal(read_image(tmp_path / "depth.exr")[:, :, 0],
                                   buffers["depth"].astype(np.float32))
     assert read_exr(tmp_path / "final.exr")[1]["scene_hash"] == "h"
@@ -351,7 +357,7 @@ def test_half_float_buffers_round_trip_to_the_nearest_half(tmp_path):
 
 
 def test_exr_writer_uses_a_thread_per_core():
-    _openexr()  # the pool is sized on first use
+    openexr()  # the pool is sized on first use
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert OpenEXR.global_thread_count() == cores
 
