@@ -14,7 +14,7 @@ from hypothesis.extra import numpy as hnp
 
 from vlref import __version__
 from vlref.errors import InputError
-from vlref.io.exr import openexr, read_exr, write_exr
+from vlref.io.exr import _openexr, read_exr, write_exr
 from vlref.io.files import write_npy, write_npz, write_text
 from vlref.io.images import read_image
 from vlref.io.output_folders import output_dir
@@ -312,7 +312,7 @@ def test_save_buffers_and_save_render(tmp_path):
                "object_id": np.full((4, 6), -1, np.int32)}
     paths = save_buffers(tmp_path, buffers, {"scene_hash": "h"})
     assert [p.name for p in paths] == ["final.exr", "depth.exr", "object_id.exr"]  # the buffers' order
-    # written at once on threads, each file holds the bytes write_exr writes alone
+    # each file holds the bytes write_exr writes alone
     alone = tmp_path / "alone"
     alone.mkdir()
     for name, array in buffers.items():
@@ -357,7 +357,7 @@ def test_half_float_buffers_round_trip_to_the_nearest_half(tmp_path):
 
 
 def test_exr_writer_uses_a_thread_per_core():
-    openexr()  # the pool is sized on first use
+    _openexr()  # the pool is sized on first use
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert OpenEXR.global_thread_count() == cores
 

@@ -26,7 +26,7 @@ from ..errors import InputError
 from ..processes import host_cores
 from .files import atomic_write, require_file
 
-__all__ = ["write_exr", "read_exr", "default_channel_names", "channel_dict", "exr_order", "openexr"]
+__all__ = ["write_exr", "read_exr", "default_channel_names", "channel_dict", "exr_order"]
 
 # Attributes every EXR header carries; user metadata may not reuse these names.
 _EXR_STANDARD = frozenset({
@@ -88,7 +88,7 @@ def channel_dict(image_or_channels, channels: Sequence[str] | str | None) -> dic
 
 
 @functools.cache
-def openexr():
+def _openexr():
     """The OpenEXR module, its global thread pool set to this process's cores once: the writer compresses
     blocks of scanlines on it (a 1080p frame's four files, ZIP: 1.35 s on one thread, 0.22 s on 16; device)."""
     import OpenEXR
@@ -98,7 +98,7 @@ def openexr():
 
 
 def _header(metadata: Mapping[str, object] | None, order: Sequence[str]) -> dict:
-    OpenEXR = openexr()
+    OpenEXR = _openexr()
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for key, value in (metadata or {}).items():
         if key in _EXR_STANDARD:
@@ -125,7 +125,7 @@ def write_exr(path, image_or_channels, channels: Sequence[str] | str | None = No
     half : store half-float channels (float32 rounded to nearest: 11 significant bits, finite up to 65504,
         larger magnitudes become inf); half the bytes. Readers widen them to float32 exactly.
     """
-    OpenEXR = openexr()
+    OpenEXR = _openexr()
 
     data = channel_dict(image_or_channels, channels)
     if half:
