@@ -1,7 +1,7 @@
 """Child processes that leave Ctrl-C to their parent.
 
 Ctrl-C sends SIGINT to the terminal's whole foreground process group: the ``vlref`` command and every
-process it started (``vlref warmup``'s pool, ``vlref render``'s march compiler, the workers of a
+process it started (``vlref warmup``'s pool, ``vlref render``'s stage compilers, the workers of a
 ``--scheduler local`` Dask cluster). Each child would raise its own ``KeyboardInterrupt`` and print its
 traceback. Children started inside :func:`ignoring_sigint` ignore SIGINT from their first instruction (an
 ignored signal stays ignored across ``fork`` and ``exec``, and Python then installs no KeyboardInterrupt
