@@ -14,6 +14,7 @@ from hypothesis.extra import numpy as hnp
 
 from vlref import __version__
 from vlref.errors import InputError
+from vlref.io.exposure import percentile_exposure
 from vlref.io.exr import _openexr, read_exr, write_exr
 from vlref.io.files import write_npy, write_npz, write_text
 from vlref.io.images import read_image
@@ -362,9 +363,18 @@ def test_exr_writer_uses_a_thread_per_core():
     assert OpenEXR.global_thread_count() == cores
 
 
+def _srgb8_formula(v, exposure):
+    """srgb8's formula written out, on the whole array at once."""
+    x = np.clip(np.nan_to_num(v * exposure, nan=0.0, posinf=1e6, neginf=0.0), 0.0, 1e6)
+    y = np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
+    s = np.where(y <= 0.0031308, 12.92 * y, 1.055 * np.power(y, 1.0 / 2.4) - 0.055)
+    return np.round(np.clip(s, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
 def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
-    # the preview runs in bands of rows on threads: the codes must be those of the whole array at once, at and
-    # around every half code (the values that round half way)
+    # the preview runs in bands of rows on threads, each in chunks of rows evaluated in place: the codes must be
+    # those of the formula on the whole array at once, at and around every half code (the values that round
+    # half way)
     rng = np.random.default_rng(2)
     s = (np.arange(255) + 0.5) / 255.0
     y = np.where(s <= 12.92 * 0.0031308, s / 12.92, ((s + 0.055) / 1.055) ** 2.4)  # sRGB OETF inverted
@@ -373,7 +383,19 @@ def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
     special = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e7]
     v = np.concatenate([np.tile(np.concatenate([x, np.nextafter(x, 0.0), np.nextafter(x, 9.0), special]), 40),
                         rng.random(3 * 517 * 301 - 40 * (3 * 255 + 6)) * 8.0]).reshape(517, 301, 3)
-    assert v.size // _SRGB_BAND >= 2  # several bands
+    assert v.size // _SRGB_BAND >= 2 and v.shape[0] > 2 * _SRGB_BAND // (3 * v.shape[1])  # bands, chunks
     for exposure in (1.0, 0.37):
-        assert np.array_equal(srgb8(v, exposure), _srgb8_values(v, exposure))
-    assert np.array_equal(srgb8(v[:2, :2]), _srgb8_values(v[:2, :2], 1.0))
+        assert np.array_equal(srgb8(v, exposure), _srgb8_formula(v, exposure))
+        assert np.array_equal(_srgb8_values(v, exposure), _srgb8_formula(v, exposure))
+    assert np.array_equal(srgb8(v[:2, :2]), _srgb8_formula(v[:2, :2], 1.0))
+
+
+def test_percentile_exposure_maps_the_percentile_of_the_finite_values_to_one_and_leaves_the_input_alone():
+    rng = np.random.default_rng(5)
+    lum = rng.random((37, 41)) * 10.0
+    lum[::5, ::3] = np.inf
+    before = lum.copy()
+    exposure, level = percentile_exposure(lum, 99.0)
+    assert level == np.percentile(lum[np.isfinite(lum)], 99.0) and exposure == 1.0 / level
+    assert np.array_equal(lum, before)  # partitioned in place: a copy, not the caller's array
+    assert percentile_exposure(np.zeros((3, 3))) == (1.0, 0.0)  # a black image keeps exposure 1

@@ -23,6 +23,6 @@ def percentile_exposure(values: np.ndarray, percentile: float = 99.0) -> tuple[f
     level to 1 before the tone map (where the ACES fit gives 0.80, sRGB code 231). ``(1, level)`` when the
     level is not positive (a black image)."""
     v = np.asarray(values, dtype=np.float64)
-    v = v[np.isfinite(v)]
-    level = float(np.percentile(v, percentile)) if v.size else 0.0
+    v = v[np.isfinite(v)]  # a copy of our own: partitioned in place
+    level = float(np.percentile(v, percentile, overwrite_input=True)) if v.size else 0.0
     return (1.0 / level if level > 0.0 else 1.0), level
