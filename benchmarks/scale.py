@@ -96,7 +96,7 @@ def main(argv=None) -> int:
 
     import numba
 
-    from vlref.work_items import host_cores
+    from vlref.processes import host_cores
 
     machine = {"cpu": platform.processor() or platform.machine(), "cores": host_cores(),
                "numba_threads": numba.config.NUMBA_NUM_THREADS, "python": platform.python_version(),

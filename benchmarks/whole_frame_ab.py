@@ -27,7 +27,8 @@ import json, tempfile, time
 t0 = time.perf_counter()
 from vlref.bench import bench_scene
 from vlref.cli.options import preview_exposure
-from vlref.io import output_dir, save_render
+from vlref.io.output_folders import output_dir
+from vlref.io.render_files import save_render
 from vlref.render import render
 t1 = time.perf_counter()
 scene = bench_scene({w}, {h}, 64, "four", {res})

@@ -9,7 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from vlref.io import luminance, png_bytes, percentile_exposure, srgb8, write_bytes
+from vlref.io.exposure import luminance, percentile_exposure
+from vlref.io.files import write_bytes
+from vlref.io.png import png_bytes
+from vlref.io.tonemap import srgb8
 from vlref.render import render
 from vlref.scene import load_scene
 from vlref.sheet import contact_sheet, labelled

@@ -305,7 +305,7 @@ from pathlib import Path
 
 from IPython.display import HTML, display
 
-from vlref.io import read_image
+from vlref.io.images import read_image
 from vlref.notebook import EXAMPLE_FILES, display_scalar, examples_dir
 from vlref.oracle import compare_files, load_presets
 from vlref.oracle.report import colour_map, heat_top, json_ready, render_html

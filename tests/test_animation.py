@@ -7,7 +7,7 @@ from scipy.spatial.transform import Rotation
 from vlref.camera import euler_matrix
 from vlref.cli import main
 from vlref.errors import InputError
-from vlref.io import read_image
+from vlref.io.images import read_image
 from vlref.scene import load_scene
 from vlref.scene.animation import scene_at
 

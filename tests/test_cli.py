@@ -8,7 +8,8 @@ import pytest
 
 from vlref import __version__
 from vlref.cli import main
-from vlref.io import read_exr, read_image
+from vlref.io.exr import read_exr
+from vlref.io.images import read_image
 
 SMALL = ["--set", "render.width=48", "--set", "render.height=27", "--set", "render.steps=8"]
 

@@ -15,7 +15,7 @@ import pytest
 
 from vlref.cli import COMMANDS, build_parser
 from vlref.cli.commands import command
-from vlref.io import write_exr
+from vlref.io.exr import write_exr
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -89,7 +89,7 @@ def test_an_unwritable_output_folder_is_refused_and_the_check_leaves_nothing(tmp
     import tempfile
 
     from vlref.errors import InputError
-    from vlref.io import check_output_dir
+    from vlref.io.output_folders import check_output_dir
 
     assert check_output_dir(tmp_path / "a" / "b") == tmp_path and list(tmp_path.iterdir()) == []
 
@@ -215,6 +215,23 @@ def test_golden_only_that_matches_nothing_is_bad_input(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []  # build wrote nothing
 
 
+def test_the_program_freezes_its_objects_out_of_the_collectors_sight_and_a_call_does_not(capsys, monkeypatch):
+    """``vlref`` as a program (argv None) freezes the objects of its imports and of its run (gc.freeze), so
+    the exit does not collect them again; a call from Python (argv given) leaves the collector alone."""
+    import gc
+
+    from vlref.cli import main
+
+    gc.unfreeze()
+    try:
+        assert main(["scenes"]) == 0 and gc.get_freeze_count() == 0
+        monkeypatch.setattr(sys, "argv", ["vlref", "scenes"])
+        assert main() == 0 and gc.get_freeze_count() > 10_000
+    finally:
+        gc.unfreeze()
+    capsys.readouterr()
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene
@@ -305,7 +322,10 @@ def test_bias_prints_its_figures_to_a_few_digits():
 
 def test_technique_all_renders_every_applicable_technique_at_one_exposure_with_its_level(tmp_path, capsys):
     from vlref.cli import main
-    from vlref.io import luminance, png_text, read_image, srgb8
+    from vlref.io.exposure import luminance
+    from vlref.io.images import read_image
+    from vlref.io.png import png_text
+    from vlref.io.tonemap import srgb8
     from vlref.sheet import LABEL_HEIGHT
 
     out = tmp_path / "all"
@@ -336,7 +356,8 @@ def test_technique_all_renders_every_applicable_technique_at_one_exposure_with_i
 
 def test_compare_refuses_an_8bit_preview_unless_asked(tmp_path, capsys):
     from vlref.cli import main
-    from vlref.io import write_exr, write_png
+    from vlref.io.exr import write_exr
+    from vlref.io.png import write_png
 
     img = np.full((4, 6, 3), 0.25, np.float32)
     write_exr(tmp_path / "ref.exr", img)

@@ -89,7 +89,7 @@ def test_sweep_on_the_cluster_equals_in_process_and_converges(tmp_path, cluster)
     ratio = float(rows["physical/000"]["mean_abs"]) / float(rows["physical/001"]["mean_abs"])
     assert rows["physical/000"]["render.steps"] == "4" and 2.5 < ratio < 6.5
     # the reference written is the quadrature reference of the same scene (float32 in the EXR)
-    from vlref.io import read_image
+    from vlref.io.images import read_image
     ref = render_reference(load_scene("pillars", ["render.width=24", "render.height=14"]), rel_tol=1e-3)
     np.testing.assert_array_equal(read_image(tmp_path / "b" / "reference" / "0.exr"), ref.inscatter.astype(np.float32))
     assert all(0.0 <= float(r["flip"]) <= 1.0 for r in rows.values())

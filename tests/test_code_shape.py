@@ -127,6 +127,6 @@ def test_vlref_modules_are_imported_at_the_top_of_each_file():
 
 
 def test_local_import_check_sees_own_modules_and_passes_optional_packages():
-    src = ("def f():\n    from .io import write_exr\n    import vlref.render\n    from vlref import scene\n"
+    src = ("def f():\n    from .io.exr import write_exr\n    import vlref.render\n    from vlref import scene\n"
            "def g():\n    import OpenEXR\n    from tqdm import tqdm\n")
     assert [h.split(":")[0] for h in _local_own_imports(src)] == ["2", "3", "4"]

@@ -10,9 +10,11 @@ import imageio.v3 as iio
 import numpy as np
 import pytest
 
-from vlref import io as vio
-from vlref.errors import InputError
 from vlref.cli import main
+from vlref.errors import InputError
+from vlref.io.exr import read_exr, write_exr
+from vlref.io.files import write_npy
+from vlref.io.images import read_image
 from vlref.oracle import compare_arrays, compare_files, load_presets, tolerance
 from vlref.oracle.metrics import error_metrics, failing_pixels, hdr_flip
 from vlref.oracle.presets import Tolerance
@@ -172,7 +174,7 @@ def test_overrides_and_bad_knobs():
 
 def _files(tmp_path, ref, test, kind="exr"):
     r, t = tmp_path / f"ref.{kind}", tmp_path / f"test.{kind}"
-    write = vio.write_exr if kind == "exr" else vio.write_npy
+    write = write_exr if kind == "exr" else write_npy
     write(r, ref)
     write(t, test)
     return r, t
@@ -198,7 +200,7 @@ def test_sky_masks(tmp_path):
     test = ref.copy()
     test[:10] *= 3.0  # wrong only in the sky
     r, t = _files(tmp_path, ref, test)
-    vio.write_exr(tmp_path / "depth.exr", depth)
+    write_exr(tmp_path / "depth.exr", depth)
     assert not compare_files(r, t, flip=False, ignore_sky=str(tmp_path / "depth.exr")).passed
     rep = compare_files(r, t, flip=False, ignore_sky=str(tmp_path / "depth.exr"), sky_depth=1000.0)
     assert rep.passed and rep.metrics["compared_pixels"] == (H - 10) * W
@@ -207,7 +209,7 @@ def test_sky_masks(tmp_path):
     with pytest.raises(InputError, match="infinite values in compared pixels"):
         compare_files(dr, dt, flip=False)
     assert compare_files(dr, dt, "exact", flip=False, ignore_sky="ref").passed
-    vio.write_exr(tmp_path / "d2.exr", np.zeros((H, W, 3)))
+    write_exr(tmp_path / "d2.exr", np.zeros((H, W, 3)))
     with pytest.raises(InputError, match="wrong channel count 3"):
         compare_files(r, t, flip=False, ignore_sky=str(tmp_path / "d2.exr"))
 
@@ -248,7 +250,7 @@ def test_any_matching_channel_count(tmp_path):
     r, t = _files(tmp_path, ref, ref * 1.5, "npy")
     rep = compare_files(r, t, "gpu-full", out_dir=tmp_path / "out")
     assert not rep.passed and not rep.flip.available and "6" in rep.flip.note
-    chans, _ = vio.read_exr(tmp_path / "out" / "diff.exr")
+    chans, _ = read_exr(tmp_path / "out" / "diff.exr")
     assert len(chans) == 6
 
 
@@ -311,7 +313,7 @@ def test_outputs_json_exr_png_html(tmp_path):
     assert data["metrics"]["max_abs"] == rep.metrics["max_abs"]
     assert data["metrics"]["failing_pixels"] == 40
     assert data["flip"]["mean"] == rep.flip.mean
-    diff = vio.read_image(out / "diff.exr")
+    diff = read_image(out / "diff.exr")
     np.testing.assert_array_equal(diff, np.abs(test - ref))
     heat = iio.imread(out / "heatmap.png")
     assert heat.shape == (H, W, 3)
@@ -352,7 +354,7 @@ def test_compare_command_exit_codes(tmp_path, capsys):
     assert main(["compare", str(r), str(t)]) == 0
     assert "PASS" in capsys.readouterr().out
     bad = tmp_path / "bad.exr"
-    vio.write_exr(bad, ref * 1.1)
+    write_exr(bad, ref * 1.1)
     assert main(["compare", str(r), str(bad), "-q"]) == 1
     assert capsys.readouterr().out == ""
     assert main(["compare", str(r), str(bad), "--preset", "gpu-quarter", "--set", "rel_tol=0.2",
@@ -361,7 +363,7 @@ def test_compare_command_exit_codes(tmp_path, capsys):
                          "--set", "max_flip_mean=0.0001", "-o", str(tmp_path / "o")]) == 1
     assert (tmp_path / "o" / "report.html").is_file()
     capsys.readouterr()
-    vio.write_exr(tmp_path / "grey.exr", ref[:, :, 0])
+    write_exr(tmp_path / "grey.exr", ref[:, :, 0])
     for argv, message in (([str(r), str(tmp_path / "missing.exr")], "file not found"),
                           ([str(r), str(tmp_path / "grey.exr")], "channel(s), the reference has 3"),
                           ([str(r), str(t), "--preset", "gpu"], "unknown preset"),

@@ -7,7 +7,8 @@ import shutil
 import numpy as np
 import pytest
 
-from vlref.io import read_image, write_exr
+from vlref.io.exr import write_exr
+from vlref.io.images import read_image
 from pathlib import Path
 
 from vlref.cli import main

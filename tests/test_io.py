@@ -13,8 +13,15 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from vlref import __version__
-from vlref import io as vio
 from vlref.errors import InputError
+from vlref.io.exposure import percentile_exposure
+from vlref.io.exr import _openexr, read_exr, write_exr
+from vlref.io.files import write_npy, write_npz, write_text
+from vlref.io.images import read_image
+from vlref.io.output_folders import output_dir
+from vlref.io.png import write_png
+from vlref.io.render_files import save_buffers, save_render
+from vlref.io.tonemap import _srgb8_values, _SRGB_BAND, srgb8
 
 
 def _awkward_float32(rng, shape):
@@ -39,13 +46,13 @@ def _no_stray_files(folder):
 def test_exr_round_trip_is_bit_exact(tmp_path):
     rng = np.random.default_rng(1)
     img = _awkward_float32(rng, (24, 32, 3))
-    path = vio.write_exr(tmp_path / "a.exr", img)
-    channels, _ = vio.read_exr(path)
+    path = write_exr(tmp_path / "a.exr", img)
+    channels, _ = read_exr(path)
     assert sorted(channels) == ["B", "G", "R"]
     for i, name in enumerate("RGB"):
         assert channels[name].dtype == np.float32
         np.testing.assert_array_equal(channels[name].view(np.uint32), img[:, :, i].view(np.uint32))
-    back = vio.read_image(path)
+    back = read_image(path)
     np.testing.assert_array_equal(back.view(np.uint32), img.view(np.uint32))
 
 
@@ -55,15 +62,15 @@ def test_exr_round_trip_is_bit_exact(tmp_path):
 def test_exr_round_trip_any_float32_array(tmp_path_factory, img):
     c = img.shape[2]
     names = tuple(f"c{i}" for i in range(c))
-    path = vio.write_exr(tmp_path_factory.mktemp("h") / "h.exr", img, channels=names)
-    back = vio.read_image(path)
+    path = write_exr(tmp_path_factory.mktemp("h") / "h.exr", img, channels=names)
+    back = read_image(path)
     np.testing.assert_array_equal(back.view(np.uint32), img.view(np.uint32))
 
 
 def test_exr_row_zero_is_top_and_float64_rounds_to_nearest(tmp_path):
     img = np.linspace(0.0, 1.0, 12 * 7).reshape(12, 7) + 1e-9  # float64, not float32-representable
-    vio.write_exr(tmp_path / "g.exr", img)
-    back = vio.read_image(tmp_path / "g.exr")
+    write_exr(tmp_path / "g.exr", img)
+    back = read_image(tmp_path / "g.exr")
     assert back.shape == (12, 7, 1)
     np.testing.assert_array_equal(back[:, :, 0], img.astype(np.float32))
     assert back[0, 0, 0] < back[-1, -1, 0]  # first row written is the first row read
@@ -71,8 +78,8 @@ def test_exr_row_zero_is_top_and_float64_rounds_to_nearest(tmp_path):
 
 def test_exr_metadata_round_trip(tmp_path):
     settings = {"render": {"width": 32, "height": 24}, "medium": {"g": 0.7}}
-    vio.write_exr(tmp_path / "m.exr", np.ones((4, 5, 3)), metadata={"scene_hash": "abc123", "settings": settings})
-    _, meta = vio.read_exr(tmp_path / "m.exr")
+    write_exr(tmp_path / "m.exr", np.ones((4, 5, 3)), metadata={"scene_hash": "abc123", "settings": settings})
+    _, meta = read_exr(tmp_path / "m.exr")
     assert meta["vlref_version"] == __version__
     assert meta["scene_hash"] == "abc123"
     assert json.loads(meta["settings"]) == settings
@@ -82,39 +89,39 @@ def test_exr_metadata_round_trip(tmp_path):
 def test_exr_channel_naming(tmp_path):
     h, w = 3, 4
     base = np.arange(h * w, dtype=np.float32).reshape(h, w)
-    vio.write_exr(tmp_path / "y.exr", base)
-    assert list(vio.read_exr(tmp_path / "y.exr")[0]) == ["Y"]
-    vio.write_exr(tmp_path / "z.exr", base, channels="Z")
-    assert list(vio.read_exr(tmp_path / "z.exr")[0]) == ["Z"]
+    write_exr(tmp_path / "y.exr", base)
+    assert list(read_exr(tmp_path / "y.exr")[0]) == ["Y"]
+    write_exr(tmp_path / "z.exr", base, channels="Z")
+    assert list(read_exr(tmp_path / "z.exr")[0]) == ["Z"]
     rgba = np.stack([base + k for k in range(4)], axis=-1)
-    vio.write_exr(tmp_path / "rgba.exr", rgba)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "rgba.exr"), rgba)  # back in R,G,B,A order
+    write_exr(tmp_path / "rgba.exr", rgba)
+    np.testing.assert_array_equal(read_image(tmp_path / "rgba.exr"), rgba)  # back in R,G,B,A order
     # arbitrary names keep the written order (EXR itself sorts names)
     five = np.stack([base * (k + 1) for k in range(5)], axis=-1)
     names = ("zeta", "alpha", "mid", "C10", "C2")
-    vio.write_exr(tmp_path / "five.exr", five, channels=names)
-    chans, _ = vio.read_exr(tmp_path / "five.exr")
+    write_exr(tmp_path / "five.exr", five, channels=names)
+    chans, _ = read_exr(tmp_path / "five.exr")
     assert set(chans) == set(names)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "five.exr"), five)
+    np.testing.assert_array_equal(read_image(tmp_path / "five.exr"), five)
     # a dict writes its keys
-    vio.write_exr(tmp_path / "d.exr", {"depth": base, "R": base + 1})
-    chans, _ = vio.read_exr(tmp_path / "d.exr")
+    write_exr(tmp_path / "d.exr", {"depth": base, "R": base + 1})
+    chans, _ = read_exr(tmp_path / "d.exr")
     np.testing.assert_array_equal(chans["depth"], base)
     np.testing.assert_array_equal(chans["R"], base + 1)
     with pytest.raises(ValueError):
-        vio.write_exr(tmp_path / "bad.exr", five)  # 5 channels need names
+        write_exr(tmp_path / "bad.exr", five)  # 5 channels need names
     with pytest.raises(ValueError):
-        vio.write_exr(tmp_path / "bad.exr", rgba, channels=("R", "G"))
+        write_exr(tmp_path / "bad.exr", rgba, channels=("R", "G"))
 
 
 def test_exr_integers_must_be_exact_in_float32(tmp_path):
     ids = np.array([[-1, 0], [7, 2 ** 24]], dtype=np.int32)
-    vio.write_exr(tmp_path / "ids.exr", ids)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "ids.exr")[:, :, 0], ids.astype(np.float32))
+    write_exr(tmp_path / "ids.exr", ids)
+    np.testing.assert_array_equal(read_image(tmp_path / "ids.exr")[:, :, 0], ids.astype(np.float32))
     with pytest.raises(ValueError, match="2\\*\\*24"):
-        vio.write_exr(tmp_path / "big.exr", np.array([[2 ** 24 + 1]], dtype=np.int64))
+        write_exr(tmp_path / "big.exr", np.array([[2 ** 24 + 1]], dtype=np.int64))
     with pytest.raises(ValueError, match="standard EXR attribute"):
-        vio.write_exr(tmp_path / "m.exr", ids, metadata={"compression": "none"})
+        write_exr(tmp_path / "m.exr", ids, metadata={"compression": "none"})
 
 
 def test_exr_half_is_widened_and_uint_rejected(tmp_path):
@@ -122,13 +129,13 @@ def test_exr_half_is_widened_and_uint_rejected(tmp_path):
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, {"Y": half}) as f:
         f.write(str(tmp_path / "h.exr"))
-    chans, _ = vio.read_exr(tmp_path / "h.exr")
+    chans, _ = read_exr(tmp_path / "h.exr")
     assert chans["Y"].dtype == np.float32
     np.testing.assert_array_equal(chans["Y"], half.astype(np.float32))
     with OpenEXR.File(header, {"id": np.arange(12, dtype=np.uint32).reshape(3, 4)}) as f:
         f.write(str(tmp_path / "u.exr"))
     with pytest.raises(InputError, match="wrong dtype uint32") as exc:
-        vio.read_exr(tmp_path / "u.exr")
+        read_exr(tmp_path / "u.exr")
     assert exc.value.path == "id"
 
 
@@ -137,7 +144,7 @@ def test_exr_half_is_widened_and_uint_rejected(tmp_path):
 def test_png_preview_written_readable_and_tone_mapped(tmp_path):
     values = np.array([[0.0, 0.18, 1.0, 1e9]], dtype=np.float64)
     img = np.repeat(values[:, :, None], 3, axis=2)
-    vio.write_png(tmp_path / "p.png", img, exposure=1.0)
+    write_png(tmp_path / "p.png", img, exposure=1.0)
     rgb = iio.imread(tmp_path / "p.png")
     assert rgb.shape == (1, 4, 3) and rgb.dtype == np.uint8
 
@@ -148,41 +155,41 @@ def test_png_preview_written_readable_and_tone_mapped(tmp_path):
 
     assert [int(c) for c in rgb[0, :, 0]] == [expected(0.0), expected(0.18), expected(1.0), 255]
     # exposure scales before the curve
-    vio.write_png(tmp_path / "e.png", img, exposure=2.0)
+    write_png(tmp_path / "e.png", img, exposure=2.0)
     assert int(iio.imread(tmp_path / "e.png")[0, 1, 0]) == expected(0.36)
     # grey input, NaN and negative values give valid pixels
-    vio.write_png(tmp_path / "g.png", np.array([[np.nan, -3.0, np.inf]]))
+    write_png(tmp_path / "g.png", np.array([[np.nan, -3.0, np.inf]]))
     assert [int(c) for c in iio.imread(tmp_path / "g.png")[0, :, 1]] == [0, 0, 255]
 
 
 def test_srgb8_is_monotonic():
     v = np.linspace(0.0, 20.0, 2001)[None, :]
-    out = vio.srgb8(v)[0, :, 0].astype(int)
+    out = srgb8(v)[0, :, 0].astype(int)
     assert out[0] == 0 and out[-1] == 255 and np.all(np.diff(out) >= 0)
 
 
 def test_read_png_scales_code_values(tmp_path):
     codes = np.array([[0, 51, 255]], dtype=np.uint8)
     iio.imwrite(tmp_path / "c.png", codes)
-    np.testing.assert_allclose(vio.read_image(tmp_path / "c.png")[:, :, 0], codes / 255.0, rtol=1e-7)
+    np.testing.assert_allclose(read_image(tmp_path / "c.png")[:, :, 0], codes / 255.0, rtol=1e-7)
     wide = np.array([[0, 65535]], dtype=np.uint16)
     iio.imwrite(tmp_path / "w.png", wide)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "w.png")[:, :, 0], [[0.0, 1.0]])
+    np.testing.assert_array_equal(read_image(tmp_path / "w.png")[:, :, 0], [[0.0, 1.0]])
 
 
 # --------------------------------------------------------------------------- NPY / NPZ and reader errors
 
 def test_npy_npz_round_trip(tmp_path):
     a = np.random.default_rng(2).random((5, 6, 2))
-    vio.write_npy(tmp_path / "a.npy", a)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "a.npy"), a)
-    assert vio.read_image(tmp_path / "a.npy").dtype == np.float64
-    vio.write_npz(tmp_path / "b.npz", {"x": a, "y": a[:, :, 0].astype(np.float16)})
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "b.npz", key="x"), a)
-    y = vio.read_image(tmp_path / "b.npz", key="y")
+    write_npy(tmp_path / "a.npy", a)
+    np.testing.assert_array_equal(read_image(tmp_path / "a.npy"), a)
+    assert read_image(tmp_path / "a.npy").dtype == np.float64
+    write_npz(tmp_path / "b.npz", {"x": a, "y": a[:, :, 0].astype(np.float16)})
+    np.testing.assert_array_equal(read_image(tmp_path / "b.npz", key="x"), a)
+    y = read_image(tmp_path / "b.npz", key="y")
     assert y.shape == (5, 6, 1) and y.dtype == np.float32
-    vio.write_npz(tmp_path / "one.npz", {"only": a}, compressed=False)
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "one.npz"), a)
+    write_npz(tmp_path / "one.npz", {"only": a}, compressed=False)
+    np.testing.assert_array_equal(read_image(tmp_path / "one.npz"), a)
 
 
 @pytest.mark.parametrize("setup, kwargs, field, reason", [
@@ -200,7 +207,7 @@ def test_npy_npz_round_trip(tmp_path):
 def test_reader_errors(tmp_path, setup, kwargs, field, reason):
     setup(tmp_path)
     with pytest.raises(InputError) as exc:
-        vio.read_image(tmp_path / "i.npy", **kwargs)
+        read_image(tmp_path / "i.npy", **kwargs)
     assert exc.value.path == field
     assert reason in exc.value.reason
     assert str(tmp_path / "i.npy") in str(exc.value)
@@ -209,28 +216,28 @@ def test_reader_errors(tmp_path, setup, kwargs, field, reason):
 def test_reader_error_cases_by_file_kind(tmp_path):
     (tmp_path / "c.exr").write_bytes(b"\x76\x2f\x31\x01garbage")
     with pytest.raises(InputError, match="unreadable EXR"):
-        vio.read_image(tmp_path / "c.exr")
+        read_image(tmp_path / "c.exr")
     (tmp_path / "c.png").write_bytes(b"\x89PNG\r\n\x1a\nbroken")
     with pytest.raises(InputError, match="unreadable PNG"):
-        vio.read_image(tmp_path / "c.png")
+        read_image(tmp_path / "c.png")
     with pytest.raises(InputError, match="file not found"):
-        vio.read_image(tmp_path / "missing.exr")
+        read_image(tmp_path / "missing.exr")
     (tmp_path / "x.tif").write_bytes(b"")
     with pytest.raises(InputError, match="unsupported file type '.tif'"):
-        vio.read_image(tmp_path / "x.tif")
+        read_image(tmp_path / "x.tif")
     np.savez(tmp_path / "two.npz", a=np.zeros((2, 2)), b=np.zeros((2, 2)))
     with pytest.raises(InputError, match="holds arrays a, b"):
-        vio.read_image(tmp_path / "two.npz")
+        read_image(tmp_path / "two.npz")
     with pytest.raises(InputError, match="no such array") as exc:
-        vio.read_image(tmp_path / "two.npz", key="c")
+        read_image(tmp_path / "two.npz", key="c")
     assert exc.value.path == "c"
-    vio.write_exr(tmp_path / "n.exr", np.array([[1.0, np.nan]]))
+    write_exr(tmp_path / "n.exr", np.array([[1.0, np.nan]]))
     with pytest.raises(InputError, match="NaN"):
-        vio.read_image(tmp_path / "n.exr")
-    vio.write_exr(tmp_path / "inf.exr", np.array([[1.0, np.inf]]))
+        read_image(tmp_path / "n.exr")
+    write_exr(tmp_path / "inf.exr", np.array([[1.0, np.inf]]))
     with pytest.raises(InputError, match="infinite value"):
-        vio.read_image(tmp_path / "inf.exr", allow_inf=False)
-    assert np.isinf(vio.read_image(tmp_path / "inf.exr")).sum() == 1  # inf is legal by default (sky depth)
+        read_image(tmp_path / "inf.exr", allow_inf=False)
+    assert np.isinf(read_image(tmp_path / "inf.exr")).sum() == 1  # inf is legal by default (sky depth)
 
 
 # --------------------------------------------------------------------------- atomicity
@@ -241,12 +248,12 @@ def test_failed_exr_write_leaves_nothing(tmp_path, monkeypatch):
         raise RuntimeError("disk full")
     monkeypatch.setattr(OpenEXR.File, "write", boom)
     with pytest.raises(RuntimeError, match="disk full"):
-        vio.write_exr(tmp_path / "a.exr", np.zeros((2, 2)))
+        write_exr(tmp_path / "a.exr", np.zeros((2, 2)))
     assert _no_stray_files(tmp_path) == []
 
 
 def test_failed_overwrite_keeps_the_old_file(tmp_path, monkeypatch):
-    path = vio.write_npy(tmp_path / "a.npy", np.arange(4.0))
+    path = write_npy(tmp_path / "a.npy", np.arange(4.0))
     before = path.read_bytes()
 
     def boom(fh, arr, allow_pickle=False):
@@ -254,13 +261,13 @@ def test_failed_overwrite_keeps_the_old_file(tmp_path, monkeypatch):
         raise KeyboardInterrupt
     monkeypatch.setattr(np, "save", boom)
     with pytest.raises(KeyboardInterrupt):
-        vio.write_npy(path, np.zeros(4))
+        write_npy(path, np.zeros(4))
     assert path.read_bytes() == before
     assert _no_stray_files(tmp_path) == ["a.npy"]
 
 
 def test_written_files_have_ordinary_permissions(tmp_path):
-    path = vio.write_png(tmp_path / "p.png", np.zeros((2, 2, 3)))
+    path = write_png(tmp_path / "p.png", np.zeros((2, 2, 3)))
     umask = os.umask(0)
     os.umask(umask)
     assert path.stat().st_mode & 0o777 == 0o666 & ~umask
@@ -268,11 +275,11 @@ def test_written_files_have_ordinary_permissions(tmp_path):
 
 def test_output_dir_moves_files_in_on_success(tmp_path):
     out = tmp_path / "a" / "b" / "out"
-    with vio.output_dir(out) as tmp:
+    with output_dir(out) as tmp:
         assert tmp != out and not out.exists()
-        vio.write_npy(tmp / "x.npy", np.zeros(3))
+        write_npy(tmp / "x.npy", np.zeros(3))
         (tmp / "sub").mkdir()
-        vio.write_text(tmp / "sub" / "note.txt", "hello")
+        write_text(tmp / "sub" / "note.txt", "hello")
     assert sorted(p.name for p in out.iterdir()) == ["sub", "x.npy"]
     assert (out / "sub" / "note.txt").read_text() == "hello"
     assert _no_stray_files(out.parent) == ["out"]
@@ -281,22 +288,22 @@ def test_output_dir_moves_files_in_on_success(tmp_path):
 def test_output_dir_leaves_nothing_on_failure(tmp_path):
     out = tmp_path / "new" / "out"
     with pytest.raises(ValueError):
-        with vio.output_dir(out) as tmp:
-            vio.write_npy(tmp / "x.npy", np.zeros(3))
+        with output_dir(out) as tmp:
+            write_npy(tmp / "x.npy", np.zeros(3))
             raise ValueError("render failed")
     assert _no_stray_files(tmp_path) == []  # not even the missing parent was created
     existing = tmp_path / "keep"
     existing.mkdir()
     (existing / "old.txt").write_text("old")
     with pytest.raises(ValueError):
-        with vio.output_dir(existing) as tmp:
-            vio.write_text(tmp / "old.txt", "new")
+        with output_dir(existing) as tmp:
+            write_text(tmp / "old.txt", "new")
             raise ValueError
     assert (existing / "old.txt").read_text() == "old"
     assert _no_stray_files(tmp_path) == ["keep"]
     (tmp_path / "file").write_text("")
     with pytest.raises(InputError, match="not a folder"):
-        with vio.output_dir(tmp_path / "file"):
+        with output_dir(tmp_path / "file"):
             pass
 
 
@@ -304,22 +311,28 @@ def test_save_buffers_and_save_render(tmp_path):
     rng = np.random.default_rng(3)
     buffers = {"final": rng.random((4, 6, 3)), "depth": np.where(rng.random((4, 6)) < 0.3, np.inf, 5.0),
                "object_id": np.full((4, 6), -1, np.int32)}
-    paths = vio.save_buffers(tmp_path, buffers, {"scene_hash": "h"})
-    assert sorted(p.name for p in paths) == ["depth.exr", "final.exr", "object_id.exr"]
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "depth.exr")[:, :, 0],
+    paths = save_buffers(tmp_path, buffers, {"scene_hash": "h"})
+    assert [p.name for p in paths] == ["final.exr", "depth.exr", "object_id.exr"]  # the buffers' order
+    # each file holds the bytes write_exr writes alone
+    alone = tmp_path / "alone"
+    alone.mkdir()
+    for name, array in buffers.items():
+        write_exr(alone / f"{name}.exr", array, metadata={"scene_hash": "h"})
+        assert (alone / f"{name}.exr").read_bytes() == (tmp_path / f"{name}.exr").read_bytes(), name
+    np.testing.assert_array_equal(read_image(tmp_path / "depth.exr")[:, :, 0],
                                   buffers["depth"].astype(np.float32))
-    assert vio.read_exr(tmp_path / "final.exr")[1]["scene_hash"] == "h"
+    assert read_exr(tmp_path / "final.exr")[1]["scene_hash"] == "h"
     checked = tmp_path / "checked"
     checked.mkdir()
     with pytest.raises(ValueError, match="safe file name"):
-        vio.save_buffers(checked, {"ok": np.zeros((2, 2)), "../evil": np.zeros((2, 2))})
+        save_buffers(checked, {"ok": np.zeros((2, 2)), "../evil": np.zeros((2, 2))})
     assert _no_stray_files(checked) == []  # validated before the first write
     result = types.SimpleNamespace(buffers=buffers, metadata={"technique": "physical"})
     out = tmp_path / "render"
     out.mkdir()
-    written = vio.save_render(out, result, stages=False, main=("final", "depth", "inscatter"), exposure=1.0)
+    written = save_render(out, result, stages=False, main=("final", "depth", "inscatter"), exposure=1.0)
     assert sorted(p.name for p in written) == ["depth.exr", "final.exr", "final.png"]
-    assert vio.read_exr(out / "final.exr")[1]["technique"] == "physical"
+    assert read_exr(out / "final.exr")[1]["technique"] == "physical"
 
 
 def test_half_float_buffers_round_trip_to_the_nearest_half(tmp_path):
@@ -328,31 +341,40 @@ def test_half_float_buffers_round_trip_to_the_nearest_half(tmp_path):
     final[0, 0] = (70000.0, -1e-9, 6e-8)  # beyond half's range -> inf; a negative underflow; a subnormal
     result = types.SimpleNamespace(buffers={"final": final, "depth": rng.random((5, 7)) * 100.0},
                                    metadata={"technique": "physical"})
-    vio.save_render(tmp_path, result, stages=False, main=("final", "depth"), half=("final",))
-    channels, meta = vio.read_exr(tmp_path / "final.exr")
+    save_render(tmp_path, result, stages=False, main=("final", "depth"), half=("final",))
+    channels, meta = read_exr(tmp_path / "final.exr")
     assert meta["technique"] == "physical" and channels["R"].dtype == np.float32
     with np.errstate(over="ignore"):
         want = final.astype(np.float32).astype(np.float16).astype(np.float32)
-    assert np.array_equal(vio.read_image(tmp_path / "final.exr"), want)
-    assert vio.read_image(tmp_path / "final.exr")[0, 0, 0] == np.inf
+    assert np.array_equal(read_image(tmp_path / "final.exr"), want)
+    assert read_image(tmp_path / "final.exr")[0, 0, 0] == np.inf
     # depth was not asked for: float32, bit for bit; half files are smaller
-    np.testing.assert_array_equal(vio.read_image(tmp_path / "depth.exr")[:, :, 0],
+    np.testing.assert_array_equal(read_image(tmp_path / "depth.exr")[:, :, 0],
                                   result.buffers["depth"].astype(np.float32))
     with OpenEXR.File(str(tmp_path / "final.exr")) as f:
         assert f.channels()["RGB"].pixels.dtype == np.float16
     with pytest.raises(ValueError, match="stay float32"):
-        vio.save_buffers(tmp_path, {"object_id": np.zeros((2, 2), np.int32)}, half=("object_id",))
+        save_buffers(tmp_path, {"object_id": np.zeros((2, 2), np.int32)}, half=("object_id",))
 
 
 def test_exr_writer_uses_a_thread_per_core():
-    vio._openexr()  # the pool is sized on first use
+    _openexr()  # the pool is sized on first use
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     assert OpenEXR.global_thread_count() == cores
 
 
+def _srgb8_formula(v, exposure):
+    """srgb8's formula written out, on the whole array at once."""
+    x = np.clip(np.nan_to_num(v * exposure, nan=0.0, posinf=1e6, neginf=0.0), 0.0, 1e6)
+    y = np.clip(x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14), 0.0, 1.0)
+    s = np.where(y <= 0.0031308, 12.92 * y, 1.055 * np.power(y, 1.0 / 2.4) - 0.055)
+    return np.round(np.clip(s, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
 def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
-    # the preview runs in bands of rows on threads: the codes must be those of the whole array at once, at and
-    # around every half code (the values that round half way)
+    # the preview runs in bands of rows on threads, each in chunks of rows evaluated in place: the codes must be
+    # those of the formula on the whole array at once, at and around every half code (the values that round
+    # half way)
     rng = np.random.default_rng(2)
     s = (np.arange(255) + 0.5) / 255.0
     y = np.where(s <= 12.92 * 0.0031308, s / 12.92, ((s + 0.055) / 1.055) ** 2.4)  # sRGB OETF inverted
@@ -361,7 +383,19 @@ def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
     special = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e7]
     v = np.concatenate([np.tile(np.concatenate([x, np.nextafter(x, 0.0), np.nextafter(x, 9.0), special]), 40),
                         rng.random(3 * 517 * 301 - 40 * (3 * 255 + 6)) * 8.0]).reshape(517, 301, 3)
-    assert v.size // vio._SRGB_BAND >= 2  # several bands
+    assert v.size // _SRGB_BAND >= 2 and v.shape[0] > 2 * _SRGB_BAND // (3 * v.shape[1])  # bands, chunks
     for exposure in (1.0, 0.37):
-        assert np.array_equal(vio.srgb8(v, exposure), vio._srgb8_values(v, exposure))
-    assert np.array_equal(vio.srgb8(v[:2, :2]), vio._srgb8_values(v[:2, :2], 1.0))
+        assert np.array_equal(srgb8(v, exposure), _srgb8_formula(v, exposure))
+        assert np.array_equal(_srgb8_values(v, exposure), _srgb8_formula(v, exposure))
+    assert np.array_equal(srgb8(v[:2, :2]), _srgb8_formula(v[:2, :2], 1.0))
+
+
+def test_percentile_exposure_maps_the_percentile_of_the_finite_values_to_one_and_leaves_the_input_alone():
+    rng = np.random.default_rng(5)
+    lum = rng.random((37, 41)) * 10.0
+    lum[::5, ::3] = np.inf
+    before = lum.copy()
+    exposure, level = percentile_exposure(lum, 99.0)
+    assert level == np.percentile(lum[np.isfinite(lum)], 99.0) and exposure == 1.0 / level
+    assert np.array_equal(lum, before)  # partitioned in place: a copy, not the caller's array
+    assert percentile_exposure(np.zeros((3, 3))) == (1.0, 0.0)  # a black image keeps exposure 1

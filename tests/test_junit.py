@@ -12,7 +12,8 @@ import numpy as np
 
 import junit_schema
 from vlref.cli import main
-from vlref.io import read_image, write_exr
+from vlref.io.exr import write_exr
+from vlref.io.images import read_image
 from vlref.oracle.golden import MANIFEST
 from vlref.oracle.junit import Case, junit_xml
 

@@ -8,7 +8,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from vlref.io import read_image, srgb8
+from vlref.io.images import read_image
+from vlref.io.tonemap import srgb8
 from vlref.notebook import (EXAMPLE_FILES, Choice, PreviewRenderer, Slider, Toggle, auto_exposure,
                             display_buffer, display_rgb, display_scalar, examples_dir, interact_or_static,
                             live_widgets, make_port_example, plot_images, scaled_light_intensity, time_call)

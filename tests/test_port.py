@@ -84,7 +84,8 @@ def test_march_on_exported_cube_and_cascade_maps_reproduces_render(tmp_path, sce
 
 def test_marched_port_differs_when_its_shadow_map_is_wrong(tmp_path):
     """The shadow maps are really read from the files: an emptied map changes the result."""
-    from vlref.io import read_image, write_exr
+    from vlref.io.exr import write_exr
+    from vlref.io.images import read_image
 
     overrides = (*SMALL, 'render.technique="physical"')
     ref = render(load_scene("pillars", overrides)).buffers["final"]

@@ -236,15 +236,17 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     ("pillars", ['render.precision="float32"']),
     ("pillars", ['lights.0.shadows.filter="exact"']),  # the march variant with the shadow-ray tracer
 ])
-def test_the_kernel_frame_compiles_the_march_the_real_frame_calls(scene_name, extra):
-    """``vlref render`` compiles the march ahead on a 1×1 frame with no objects and no shadow maps: it
-    must have exactly the types of the real frame's call, or the real render would compile again."""
-    from vlref.march.physical import march_physical
-    from vlref.warmup import compile_march, march_cached
+def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name, extra):
+    """``vlref render`` compiles later stages ahead on 1×1 frames with no objects (and a G-buffer of sky, no
+    shadow maps but the stage's own): each must have exactly the types of the real frame's call, or the real
+    render would compile again."""
+    from vlref.warmup import AHEAD, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
-    called = set(march_physical.signatures)
-    compile_march(scene)
-    assert set(march_physical.signatures) == called
-    assert march_cached(scene)  # cache=True wrote it; the render command then skips the second process
+    called = {stage: set(kernel.signatures) for stage, (_, kernel) in AHEAD.items()}
+    for stage, (_, kernel) in AHEAD.items():
+        compile_stage(stage, scene)
+        assert set(kernel.signatures) == called[stage], stage
+        if stage == "march" or kernel.signatures:  # cache=True wrote it; the render command then starts no process
+            assert stage_cached(stage, scene), stage

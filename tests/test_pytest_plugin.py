@@ -8,7 +8,7 @@ import json
 import numpy as np
 import pytest
 
-from vlref.io import read_image
+from vlref.io.images import read_image
 from vlref.port import export_port
 from vlref.render import render
 from vlref.scene import load_scene

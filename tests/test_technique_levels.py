@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 
 from vlref.cli import main
-from vlref.io import luminance, png_text, read_image
+from vlref.io.exposure import luminance
+from vlref.io.images import read_image
+from vlref.io.png import png_text
 from vlref.scene import bundled_scenes, load_scene
 from vlref.techniques import TECHNIQUES
 

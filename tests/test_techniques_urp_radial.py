@@ -7,7 +7,7 @@ import pytest
 from scipy.ndimage import map_coordinates
 
 from vlref.errors import InputError
-from vlref.io import write_exr
+from vlref.io.exr import write_exr
 from vlref.render import prepare_frame
 from vlref.scene.load import load_scene
 from vlref.techniques import radial, urp

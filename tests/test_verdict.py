@@ -17,7 +17,8 @@ from hypothesis import strategies as st
 
 from vlref.cli import main
 from vlref.errors import InputError
-from vlref.io import read_image, write_exr
+from vlref.io.exr import write_exr
+from vlref.io.images import read_image
 from vlref.oracle.compare import compare_arrays, margin
 from vlref.oracle.edges import block_any, depth_discontinuities, dilate, edge_zone
 from vlref.oracle.presets import load_presets, tolerance

@@ -65,7 +65,7 @@ def faithful(device, tmp_path_factory):
 def test_port_depth_matches_vlref_ray_cast_depth_off_silhouettes(faithful):
     """The port's rasterised, reversed-Z depth32float buffer decodes (by vlref) to vlref's own ray-cast depth,
     except where tessellated cylinders and spheres and their silhouettes differ from the analytic shapes."""
-    from vlref.io import read_image
+    from vlref.io.images import read_image
     from vlref.render import prepare_frame
 
     port, _, marched, _ = faithful

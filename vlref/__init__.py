@@ -18,7 +18,8 @@ The package is laid out as the pipeline it computes::
     oracle/     image comparison, tolerance presets, golden suite
     sweep.py    ``vlref sweep``: techniques × a grid of overrides, measured against the reference
     port/       a GPU port's own buffers: manifest, decoding, shadow import, export, the march on them
-    io.py       EXR / PNG / NPY / NPZ
+    io/         files: atomic writes, all-or-nothing output folders, EXR, checked image readers, the preview
+                tone map and PNG, luminance and exposure, a render's files
     tomlfile.py the one reader of vlref's TOML formats (scenes, suites, sweeps, manifests, presets)
     errors.py   InputError, the one error type for bad input (``FILE: key.path: reason``)
     numeric.py  float-type helpers (``cast``, ``zero_one``) and vectorisable ``exp`` / ``expm1``
@@ -28,8 +29,9 @@ The package is laid out as the pipeline it computes::
     notebook.py helpers for the Jupyter notebooks (display, controls, preview re-renders)
     cli/        the ``vlref`` command: every argument parser, one module per sub-command
     bench/      ``vlref bench``: throughput of every stage, by section
+    processes.py child processes that leave Ctrl-C to vlref; the cores this process may use
     progress.py long kernels run band by band of rows: progress reports, Ctrl-C between bands
-    warmup.py   compile every kernel once (``vlref warmup``) and the march compiled ahead of a cold render
+    warmup.py   compile every kernel once (``vlref warmup``); a cold render's later stages compiled ahead
 """
 
 __version__ = "0.1.0"

@@ -3,7 +3,7 @@ timing, fast preview re-renders and the bundled port-validation example.
 
 Display
     :func:`display_rgb` tone-maps a linear HDR image exactly as the PNG previews do
-    (:func:`vlref.io.srgb8`: exposure, ACES filmic fit, sRGB OETF); :func:`auto_exposure` picks the
+    (:func:`vlref.io.tonemap.srgb8`: exposure, ACES filmic fit, sRGB OETF); :func:`auto_exposure` picks the
     exposure that maps the 99th percentile of the brightest channel to 1. :func:`display_scalar`
     normalises a one-channel buffer (depth, shadow-map distances) to [0, 1] with non-finite values
     (sky, empty texels) as NaN, which matplotlib draws in its "bad" colour. :func:`display_buffer`
@@ -52,7 +52,8 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from .errors import InputError
-from .io import srgb8, write_exr
+from .io.exr import write_exr
+from .io.tonemap import srgb8
 from .lights import pack_lights
 from .lights.shading import scene_colour
 from .render import Frame, prepare_frame, render
@@ -76,7 +77,7 @@ def auto_exposure(image: np.ndarray, percentile: float = 99.0) -> float:
 
 
 def display_rgb(image: np.ndarray, exposure: float | None = None) -> np.ndarray:
-    """``(H, W)`` or ``(H, W, 3)`` linear HDR -> ``(H, W, 3)`` uint8 sRGB (:func:`vlref.io.srgb8`).
+    """``(H, W)`` or ``(H, W, 3)`` linear HDR -> ``(H, W, 3)`` uint8 sRGB (:func:`vlref.io.tonemap.srgb8`).
 
     ``exposure`` None -> :func:`auto_exposure` of the image.
     """

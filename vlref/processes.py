@@ -1,22 +1,28 @@
 """Child processes that leave Ctrl-C to their parent.
 
 Ctrl-C sends SIGINT to the terminal's whole foreground process group: the ``vlref`` command and every
-process it started (``vlref warmup``'s pool, ``vlref render``'s march compiler, the workers of a
+process it started (``vlref warmup``'s pool, ``vlref render``'s stage compilers, the workers of a
 ``--scheduler local`` Dask cluster). Each child would raise its own ``KeyboardInterrupt`` and print its
 traceback. Children started inside :func:`ignoring_sigint` ignore SIGINT from their first instruction (an
 ignored signal stays ignored across ``fork`` and ``exec``, and Python then installs no KeyboardInterrupt
 handler, nor does asyncio); the parent alone handles it, and stops them (terminates its pool, closes its
-cluster).
+cluster). :func:`host_cores` says how many processes or threads this one may keep busy.
 """
 
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
 import threading
 from typing import Iterator
 
-__all__ = ["ignoring_sigint"]
+__all__ = ["ignoring_sigint", "host_cores"]
+
+
+def host_cores() -> int:
+    """Cores this process may run on (affinity mask where the OS has one)."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 @contextlib.contextmanager

@@ -44,7 +44,10 @@ import numpy as np
 import pytest
 
 from . import __version__
-from .io import output_dir, read_image, write_exr, write_text
+from .io.exr import write_exr
+from .io.files import write_text
+from .io.images import read_image
+from .io.output_folders import output_dir
 from .oracle.compare import build_mask, compare_arrays
 from .oracle.junit import report_case
 from .oracle.report import json_ready, write_outputs

@@ -23,7 +23,10 @@ from typing import Callable, Iterator, Sequence
 import numpy as np
 
 from .errors import InputError
-from .io import save_buffers, srgb8, write_bytes, write_png
+from .io.files import write_bytes
+from .io.png import write_png
+from .io.render_files import save_buffers
+from .io.tonemap import srgb8
 from .render import render
 
 __all__ = ["parse_frames", "render_sequence", "write_sequence", "preview_gif", "write_mp4"]

@@ -6,7 +6,7 @@
 show (each ``final.png`` of a single render is auto-exposed on its own, which hides them).
 
 The level of a technique is ``mean Y(inscatter) / mean Y(inscatter of physical)``, ``Y`` the Rec. 709
-luminance (:func:`vlref.io.luminance`) averaged over the frame: how much more (or less) light the
+luminance (:func:`vlref.io.exposure.luminance`) averaged over the frame: how much more (or less) light the
 technique scatters toward the camera than the physical single-scattering march of the same scene.
 """
 
@@ -16,7 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .io import luminance
+from .io.exposure import luminance
 
 __all__ = ["inscatter_level", "labelled", "contact_sheet"]
 

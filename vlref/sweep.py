@@ -18,7 +18,7 @@ scene; points that differ only in what the reference ignores (``render.technique
 ``sampling``, ``resolution``, ``precision``, ``exposure``, the parameters of techniques other than
 ``physical``) share one reference item.
 
-Output folder (all or nothing, :func:`vlref.io.output_dir`), the same bytes whatever the scheduler:
+Output folder (all or nothing, :func:`vlref.io.output_folders.output_dir`), the same bytes whatever the scheduler:
 
 * ``<technique>/<point>.exr``: the item's inscatter (float32), its overrides in the header;
 * ``reference/<n>.exr``: each reference's inscatter;
@@ -48,7 +48,9 @@ import numpy as np
 
 from .work_items import After, Item, run_items
 from .errors import InputError
-from .io import output_dir, write_bytes, write_exr, write_text
+from .io.exr import write_exr
+from .io.files import write_bytes, write_text
+from .io.output_folders import output_dir
 from .oracle.metrics import hdr_flip
 from .reference import render_reference
 from .reference.bias import inscatter_error

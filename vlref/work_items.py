@@ -5,7 +5,7 @@ Task model
 An :class:`Item` is a pure function call ``fn(*args, **kwargs)`` with a unique ``key`` (the name it is
 reported under): a golden entry, a tile of rows of a reference image, a sweep point. It returns
 picklable arrays and metadata; it writes no file. The caller writes every result into one
-:func:`vlref.io.output_dir` as it arrives, so a run either lands whole or leaves nothing, and the
+:func:`vlref.io.output_folders.output_dir` as it arrives, so a run either lands whole or leaves nothing, and the
 bytes written do not depend on where an item ran. An argument ``After(key)`` stands for the result of
 an earlier item (a sweep point needs its reference).
 
@@ -47,10 +47,10 @@ from pathlib import Path
 from typing import Any, Callable, Iterator, Sequence
 
 from .errors import InputError
-from .processes import ignoring_sigint
+from .processes import host_cores, ignoring_sigint
 
 __all__ = ["Item", "After", "ItemsFailed", "parse_scheduler", "run_items",
-           "local_cluster", "host_cores"]
+           "local_cluster"]
 
 
 @dataclass(frozen=True)
@@ -83,11 +83,6 @@ class ItemsFailed(Exception):
 
 
 _LOCAL = re.compile(r"^local(?::(\d+))?$")
-
-
-def host_cores() -> int:
-    """Cores this process may run on (affinity mask where the OS has one)."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def parse_scheduler(text: str | None):

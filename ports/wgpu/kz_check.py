@@ -52,7 +52,7 @@ def size_overrides(scene_path, width: int, height: int) -> list[str]:
 
 def compare(ref_path: Path, test, preset: str, ignore_sky: bool = False, overrides=None):
     """``vlref compare`` of a vlref EXR with a port array (a report: passed, checks, metrics)."""
-    from vlref.io import read_image
+    from vlref.io.images import read_image
     from vlref.oracle.compare import build_mask, compare_arrays
     from vlref.oracle.presets import tolerance
 

@@ -27,8 +27,9 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
                   (``killzone``, half resolution, 16 steps, post passes included).
 ``reference``     :func:`vlref.reference.render_reference` at ``rel_tol = 1e-4`` on a reduced
                   resolution of (a) (the same frustum): seconds per pixel, and the estimate for 640x360.
-``first_render``  a fresh interpreter that imports vlref and renders (a) at 320x180, with a fresh
-                  (``cold``) and then a filled (``warm``) ``NUMBA_CACHE_DIR``: process wall time.
+``first_render``  a fresh interpreter that imports vlref, renders (a) at 320x180 and writes its outputs as
+                  ``vlref render`` does (cold kernels compiled ahead in second processes), with a fresh
+                  (``cold``) and then a filled (``warm``) ``NUMBA_CACHE_DIR``: process wall time, its split.
 ``memory``        peak memory of a frame of (b) at the memory size (steps do not change allocations):
                   ``tracemalloc`` peak of the NumPy allocations in this process, and the peak resident
                   set of a subprocess that renders the same frame (``VmHWM``; ``ru_maxrss`` where there

@@ -52,16 +52,23 @@ print(json.dumps({{"import_s": t1 - t0, "render_s": t2 - t1, "maxrss_bytes": pea
 """
 
 
-def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: int) -> dict:
-    """Run a fresh interpreter that renders the benchmark scene; its report plus the process wall time.
-
-    ``cache_dir``: the child's ``NUMBA_CACHE_DIR`` (None: this process's setting).
-    """
+def _child_env(cache_dir: str | None) -> dict:
+    """The environment of a fresh interpreter: this one's, with this vlref first on the path and
+    ``NUMBA_CACHE_DIR`` = ``cache_dir`` (None: this process's setting)."""
     env = dict(os.environ)
     if cache_dir is not None:
         env["NUMBA_CACHE_DIR"] = cache_dir
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(Path(__file__).resolve().parents[2]),
                                                     env.get("PYTHONPATH")) if p)
+    return env
+
+
+def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: int) -> dict:
+    """Run a fresh interpreter that renders the benchmark scene; its report plus the process wall time.
+
+    ``cache_dir``: the child's ``NUMBA_CACHE_DIR`` (None: this process's setting).
+    """
+    env = _child_env(cache_dir)
     code = _CHILD.format(w=w, h=h, steps=steps, lights=lights, res=res)
     start = time.perf_counter()
     proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
@@ -72,51 +79,59 @@ def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: 
 
 
 _WHOLE = """
-import json, sys, tempfile, time
+import gc, json, sys, tempfile, time
 t0 = time.perf_counter()
 from vlref.bench import bench_scene
 from vlref.cli.render import render_to_folder
+gc.freeze()  # as the vlref program does (vlref.cli.commands.main)
 t1 = time.perf_counter()
 with tempfile.TemporaryDirectory() as folder:
-    result, _, write_s, _ = render_to_folder(bench_scene({w}, {h}, {steps}, "four", {res}), folder + "/out")
+    result, _, write_s, _ = render_to_folder(bench_scene({w}, {h}, {steps}, {lights!r}, {res}), folder + "/out")
 t2 = time.perf_counter()
+gc.freeze()
 print(json.dumps({{"import_s": t1 - t0, "stages": result.timings, "write_s": write_s, "in_process_s": t2 - t0}}))
 """
+
+
+def _whole(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: int) -> dict:
+    """A fresh interpreter renders the benchmark scene as ``vlref render`` does (``_WHOLE``); its report,
+    the process wall time and the exit's share of it. ``cache_dir``: the child's ``NUMBA_CACHE_DIR`` (None:
+    this process's setting)."""
+    env = _child_env(cache_dir)
+    start = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", _WHOLE.format(w=w, h=h, steps=steps, lights=lights, res=res)],
+                          env=env, capture_output=True, text=True, check=True)
+    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    report["process_s"] = time.perf_counter() - start
+    report["render_s"] = sum(report["stages"].values())
+    report["split"] = {"start_and_import": report["import_s"], **report["stages"], "write": report["write_s"],
+                       "exit": report["process_s"] - report["in_process_s"]}
+    return report
 
 
 def bench_whole_render(cfg: BenchConfig) -> dict:
     """``vlref render`` of (b) at ``cfg.width x cfg.height`` in a fresh process with this process's (warm) Numba
     cache, as the command does it (:func:`vlref.cli.render.render_to_folder`: render, preview exposure, EXR
     buffers and PNG into a folder): process wall time and its split (interpreter start and imports, each
-    render stage, writing)."""
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(Path(__file__).resolve().parents[2]),
-                                                    env.get("PYTHONPATH")) if p)
-    code = _WHOLE.format(w=cfg.width, h=cfg.height, steps=cfg.steps, res=cfg.shadow_resolution)
-    runs = []
-    for _ in range(max(1, cfg.repeats)):
-        start = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
-        report = json.loads(proc.stdout.strip().splitlines()[-1])
-        report["process_s"] = time.perf_counter() - start
-        runs.append(report)
+    render stage, writing, exit)."""
+    runs = [_whole(None, cfg.width, cfg.height, cfg.steps, "four", cfg.shadow_resolution)
+            for _ in range(max(1, cfg.repeats))]
     best = sorted(runs, key=lambda r: r["process_s"])[len(runs) // 2]
-    split = {"start_and_import": best["import_s"], **best["stages"], "write": best["write_s"],
-             "exit": best["process_s"] - best["in_process_s"]}
     return {"width": cfg.width, "height": cfg.height, "steps": cfg.steps, "lights": 4, "seconds": best["process_s"],
-            "split": split, "what": "fresh process, warm cache: render (b) and write its default outputs"}
+            "split": best["split"], "what": "fresh process, warm cache: render (b) and write its default outputs"}
 
 
 def bench_first_render(cfg: BenchConfig) -> dict:
-    """A fresh process renders (a): with a fresh cache, then with the cache it filled (``cold_cache``), else
-    only with this process's cache (warm; ``cold`` is then None)."""
+    """A fresh process renders (a) and writes its outputs as ``vlref render`` does (its compile spread over
+    processes: :func:`vlref.warmup.compile_ahead`): with a fresh cache, then with the cache it filled
+    (``cold_cache``), else only with this process's cache (warm; ``cold`` is then None)."""
     w, h = cfg.first_render
     if not cfg.cold_cache:
-        warm = _child(None, w, h, cfg.steps, "one", cfg.shadow_resolution)
+        warm = _whole(None, w, h, cfg.steps, "one", cfg.shadow_resolution)
         return {"width": w, "height": h, "cold": None, "warm": warm, "note": "cold run skipped (--quick)"}
     with tempfile.TemporaryDirectory(prefix="vlref_bench_cache_") as cache:
-        cold = _child(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
-        warm = _child(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
+        cold = _whole(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
+        warm = _whole(cache, w, h, cfg.steps, "one", cfg.shadow_resolution)
     return {"width": w, "height": h, "cold": cold, "warm": warm, "note": ""}
 
 

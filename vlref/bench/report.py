@@ -12,6 +12,7 @@ import llvmlite.binding as llvm
 import numba
 import numpy as np
 
+from ..processes import host_cores
 from .config import BenchConfig
 from .march import bench_baseline, bench_march, bench_scaling
 from .renders import bench_first_render, bench_memory, bench_reference, bench_whole_render
@@ -77,7 +78,7 @@ def machine_info(argv: list[str]) -> dict:
                 break
     except OSError:
         pass
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cores = host_cores()
     # the CPU LLVM compiles for: its tuning sets the vector width (Intel server cores: 256-bit even with
     # AVX-512; BENCHMARKS.md "Wider vectors"), so two machines' figures compare only with it
     llvm_cpu = numba.config.CPU_NAME or llvm.get_host_cpu_name()

@@ -10,7 +10,7 @@ import sys
 from pathlib import Path
 
 from ..bench import FULL, QUICK, format_report, run_bench
-from ..io import check_output_file
+from ..io.output_folders import check_output_file
 
 HELP = "benchmarks (--quick, --json)"
 

@@ -6,7 +6,7 @@ import argparse
 
 from pathlib import Path
 
-from ..io import output_dir
+from ..io.output_folders import output_dir
 from ..reference.bias import DEFAULT_STEPS, technique_bias
 from .options import add_scene_arguments, load_scene_checked, technique_names, technique_rules
 from .progress_bar import StageBar

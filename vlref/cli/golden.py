@@ -8,7 +8,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from ..io import check_output_dir, check_output_file
+from ..io.output_folders import check_output_dir, check_output_file
 from ..oracle.golden import (SUITE_FILE, build, build_dir, find_golden_dir, load_suite, select_entries, suite_entries,
                              verify)
 from ..oracle.junit import Case, write_junit

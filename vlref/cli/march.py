@@ -8,7 +8,7 @@ import sys
 import time
 from pathlib import Path
 
-from ..io import check_output_dir
+from ..io.output_folders import check_output_dir
 from ..port import load_port, march_sequence, save_march
 from .progress_bar import StageBar
 

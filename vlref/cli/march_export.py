@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..io import check_output_dir
+from ..io.output_folders import check_output_dir
 from ..port import export_port
 
 HELP = None  # listed under ``vlref march``

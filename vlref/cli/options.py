@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..io import check_output_dir, check_output_file, luminance, percentile_exposure
+from ..io.exposure import luminance, percentile_exposure
+from ..io.output_folders import check_output_dir, check_output_file
 from ..memory import check_memory
 from ..scene import load_scene
 from ..scene.model import TECHNIQUES
@@ -43,7 +44,7 @@ def add_scene_arguments(p: argparse.ArgumentParser, required: bool = False) -> N
 
 def check_report_outputs(output, junit) -> None:
     """Before any work: the report folder ``-o`` (when given) and the JUnit file ``--junit`` (when given) can be
-    written (:func:`vlref.io.check_output_dir`, :func:`vlref.io.check_output_file`)."""
+    written (:func:`vlref.io.output_folders.check_output_dir`, :func:`vlref.io.output_folders.check_output_file`)."""
     if output:
         check_output_dir(output)
     if junit:

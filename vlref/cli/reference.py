@@ -6,7 +6,9 @@ import argparse
 from pathlib import Path
 
 from .. import __version__
-from ..io import output_dir, write_exr, write_png
+from ..io.exr import write_exr
+from ..io.output_folders import output_dir
+from ..io.png import write_png
 from ..reference import render_reference
 from ..reference.tiles import render_reference_tiled
 from ..render import scene_hash

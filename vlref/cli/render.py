@@ -9,12 +9,16 @@ import time
 from pathlib import Path
 
 from ..errors import InputError
-from ..io import output_dir, png_bytes, save_render, srgb8, write_bytes
+from ..io.files import write_bytes
+from ..io.output_folders import output_dir
+from ..io.png import png_bytes
+from ..io.render_files import save_render
+from ..io.tonemap import srgb8
 from ..render import render
 from ..sequence import parse_frames, write_sequence
 from ..sheet import contact_sheet, inscatter_level, labelled
 from ..techniques import TECHNIQUES
-from ..warmup import march_ahead
+from ..warmup import compile_ahead
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names, technique_rules
 from .progress_bar import StageBar
 
@@ -51,13 +55,12 @@ def render_to_folder(scene, output, stages: bool = False, half_float: bool = Fal
     (all or nothing). Returns ``(result, phrase, write_seconds, kept)``: the render, the preview-exposure phrase,
     the time from the end of the render to the files in place (exposure, EXR, PNG), and the files of an earlier
     run that ``output`` still holds (this run did not write them)."""
-    # 4 render stages, then the files; a cold march kernel compiles in a second process meanwhile
-    with StageBar(quiet, 5, f"render {Path(scene.source).stem}") as bar, march_ahead(scene) as march_ready:
+    # 4 render stages, then the files; cold kernels of later stages compile in second processes meanwhile
+    with StageBar(quiet, 5, f"render {Path(scene.source).stem}") as bar, compile_ahead(scene) as ready:
         def stage(name: str) -> None:
-            if name == "shadow maps":  # built (part of the volumetric stage): the march comes next
-                march_ready()
-            else:
+            if name != "shadow maps":  # built within the volumetric stage: not a stage of the bar
                 bar.stage(name)
+            ready(name)  # the next stage's kernels, where a second process compiles them
 
         result = render(scene, stages=stages, progress=stage)
         earlier = _files(output)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ..io import check_output_dir
+from ..io.output_folders import check_output_dir
 from ..sweep import load_sweep, run_sweep
 from .options import add_scheduler_argument
 

@@ -25,7 +25,7 @@ import numpy as np
 
 from .. import __version__
 from ..errors import InputError
-from ..io import read_image
+from ..io.images import read_image
 from .metrics import FlipResult, error_metrics, failing_pixels, hdr_flip
 from .presets import Tolerance, tolerance
 from .report import write_outputs

@@ -43,7 +43,10 @@ import numpy as np
 from .. import __version__
 from ..work_items import Item, run_items
 from ..errors import InputError
-from ..io import output_dir, read_image, write_exr, write_text
+from ..io.exr import write_exr
+from ..io.files import write_text
+from ..io.images import read_image
+from ..io.output_folders import output_dir
 from ..render import render, scene_hash, scene_settings_json
 from ..scene import bundled_scenes, load_scene
 from ..sequence import render_sequence
@@ -255,7 +258,7 @@ def build(golden_dir=None, suite_path=SUITE_FILE, only: Sequence[str] | None = N
     :func:`build_dir`); returns the manifest.
 
     With ``only``, the other entries of an existing manifest are kept. Files of entries no longer in the
-    suite are removed. All files are written atomically (:func:`vlref.io.output_dir`). Entries are
+    suite are removed. All files are written atomically (:func:`vlref.io.output_folders.output_dir`). Entries are
     independent items rendered on ``scheduler`` (:func:`vlref.work_items.run_items`); the files and the
     manifest are the same bytes whatever the scheduler.
     """

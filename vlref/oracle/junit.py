@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Iterable, Mapping
 
-from ..io import write_text
+from ..io.files import write_text
 
 __all__ = ["Case", "report_case", "junit_xml", "write_junit"]
 

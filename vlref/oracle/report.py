@@ -13,7 +13,7 @@
   float32, float16 beyond :data:`FLOAT32_PIXELS`, byte-shuffled and deflated; the masks as packed bits); then the numbers, each value
   cell tagged ``data-key="metrics.max_abs"`` etc. Reference and test previews share one exposure (given,
   or automatic: the 99th percentile of the reference's compared values maps to 1), tone-mapped as in
-  :func:`vlref.io.srgb8`.
+  :func:`vlref.io.tonemap.srgb8`.
 """
 
 from __future__ import annotations
@@ -27,8 +27,12 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import (default_channel_names, output_dir, percentile_exposure, png_bytes, srgb8, write_bytes, write_exr,
-                  write_text)
+from ..io.exposure import percentile_exposure
+from ..io.exr import default_channel_names, write_exr
+from ..io.files import write_bytes, write_text
+from ..io.output_folders import output_dir
+from ..io.png import png_bytes
+from ..io.tonemap import srgb8
 
 __all__ = ["colour_map", "heat_top", "json_ready", "write_outputs", "render_html", "preview_exposure"]
 

@@ -55,7 +55,8 @@ import numpy as np
 from scipy import ndimage
 
 from ..errors import InputError
-from ..io import output_dir, write_text
+from ..io.files import write_text
+from ..io.output_folders import output_dir
 from ..lights import pack_lights
 from ..lights.pack import I_KIND
 from ..lights.shadow_pack import SHADOW_HARD, SHADOW_PCF, ShadowMaps

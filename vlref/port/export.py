@@ -11,7 +11,9 @@ from typing import Sequence
 import numpy as np
 
 from ..camera import Camera, linear_to_raw, look_rotation
-from ..io import output_dir, write_exr, write_text
+from ..io.exr import write_exr
+from ..io.files import write_text
+from ..io.output_folders import output_dir
 from ..lights.shadow_cast import cascade_splits, texel_grid
 from ..lights.shadow_pack import CUBE_FACES, SHADOW_EXACT, SHADOW_NONE
 from ..render import prepare_frame

@@ -14,7 +14,8 @@ import numpy as np
 
 from ..geometry import build_geometry
 from ..geometry.raycast import GBuffer
-from ..io import output_dir, write_exr
+from ..io.exr import write_exr
+from ..io.output_folders import output_dir
 from ..lights import pack_lights
 from ..render import Frame, scene_hash
 from ..techniques import FRAME_BUFFERS, TECHNIQUES

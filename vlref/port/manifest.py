@@ -17,7 +17,7 @@ import numpy as np
 
 from ..camera import DEPTH_CONVENTIONS, Camera, camera_from_settings
 from ..errors import InputError
-from ..io import read_image
+from ..io.images import read_image
 from ..scene import load_scene
 from ..scene.animation import scene_at
 from ..scene.fields import F

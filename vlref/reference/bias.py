@@ -28,7 +28,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..io import write_exr, write_text
+from ..io.exr import write_exr
+from ..io.files import write_text
 from ..render import render
 from .quadrature import ReferenceResult, render_reference
 

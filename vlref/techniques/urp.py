@@ -20,7 +20,7 @@ import numpy as np
 
 from ..camera import linear_to_raw, raw_to_linear
 from ..errors import InputError
-from ..io import read_image
+from ..io.images import read_image
 from ..lights.pack import F_DX, F_DZ
 from ..march.urp import urp_hash, urp_march
 from ..post.blur import urp_article_blur_pass
