@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit, prange
 
 from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
 from vlref.post.resolution import check_choice
@@ -102,8 +102,9 @@ RADIAL_TILE = 256
 
 
 @njit(cache=True, fastmath=False)
-def _tap_columns(u, W, lo, hi, offset, repeat, tx, ia, ib):
-    """Per pixel of a tile: ``tx``, and the array columns ``ia``, ``ib`` of the texels left and right of ``u W - 1/2``.
+def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
+    """Per pixel ``x < n`` of a tile: ``tx``, and where the texels left and right of ``u W - 1/2`` start in an image row of
+    ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check).
 
     Texel ``i`` is column ``i mod W`` when ``repeat``, else ``clamp(i, lo, hi) + offset``; the clamp is taken on
     the integral float ``floor(x)`` (the same index as clamping the integer, and no integer overflow far off
@@ -111,39 +112,41 @@ def _tap_columns(u, W, lo, hi, offset, repeat, tx, ia, ib):
     """
     prefer_wide_vectors()
     if repeat:
-        for x in range(u.size):
+        for x in range(n):
             xx = u[x] * W - 0.5
             xf = math.floor(xx)
             tx[x] = xx - xf
-            ia[x] = int(xf) % W
-            ib[x] = (int(xf) + 1) % W
+            ia[x] = (int(xf) % W) * C
+            ib[x] = ((int(xf) + 1) % W) * C
     else:
-        for x in range(u.size):
+        for x in range(n):
             xx = u[x] * W - 0.5
             xf = math.floor(xx)
             tx[x] = xx - xf
-            ia[x] = int(min(max(xf, lo), hi)) + offset
-            ib[x] = int(min(max(xf + 1.0, lo), hi)) + offset
+            ia[x] = (int(min(max(xf, lo), hi)) + offset) * C
+            ib[x] = (int(min(max(xf + 1.0, lo), hi)) + offset) * C
 
 
 @njit(cache=True, fastmath=False)
-def _tap_rows(img, ra, rb, ty, tx, ia, ib, w, acc):
-    """``acc[ch, x] += w * bilinear(...)`` for every pixel ``x`` of a tile and channel ``ch``: texel rows ``ra``, ``rb``,
-    columns ``ia[x]``, ``ib[x]``; bilinear as ``a + t (b - a)`` along x, then y (:func:`_fetch_add`'s order).
+def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
+    """``acc[ch, x] += w * bilinear(...)`` for every pixel ``x < n`` of a tile and channel ``ch``: the texel rows start at
+    ``ra``, ``rb`` in the flattened image ``flat``, the texels at ``ia[x]``, ``ib[x]`` in a row
+    (:func:`_tap_columns`); bilinear as ``a + t (b - a)`` along x, then y (:func:`_fetch_add`'s order).
 
     One channel at a time over the tile's pixels: the loop has no inner loop, its stores (``acc``) cannot change
-    what it reads (``img``, declared with :func:`~vlref.numeric.arrays_do_not_overlap`), so LLVM vectorises it,
-    the texel reads as gathers.
+    what it reads (``flat``, declared with :func:`~vlref.numeric.arrays_do_not_overlap`) and its indices are
+    unsigned sums (no sign checks, no multiplies), so LLVM vectorises it, the texel reads as gathers.
     """
     prefer_wide_vectors()
     arrays_do_not_overlap()
     for ch in range(acc.shape[0]):
-        for x in range(tx.size):
+        a0, b0 = ra + np.uint64(ch), rb + np.uint64(ch)
+        for x in range(n):
             a, b, t = ia[x], ib[x], tx[x]
-            t00 = img[ra, a, ch]
-            t10 = img[ra, b, ch]
-            t01 = img[rb, a, ch]
-            t11 = img[rb, b, ch]
+            t00 = flat[a0 + a]
+            t10 = flat[a0 + b]
+            t01 = flat[b0 + a]
+            t11 = flat[b0 + b]
             top = t00 + t * (t10 - t00)
             bottom = t01 + t * (t11 - t01)
             acc[ch, x] = acc[ch, x] + (top + ty * (bottom - top)) * w
@@ -157,12 +160,12 @@ def _row_index(yf, n, lo, hi, offset, repeat):
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _radial_tiles(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay, mode, exposure, visibility):
+def _radial_tiles(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay, mode, exposure, visibility, items):
     """Listing 13-1 on every pixel, then ``(C * exposure) * visibility``: (H, W, C).
 
-    The work items are tiles of :data:`RADIAL_TILE` pixels of one row, ordered down the image column band by
-    column band, so that a thread's consecutive tiles read nearly the same texels (they stay in its cache). Per
-    tile, taps outer and pixels inner: the row's ``v`` (and so its texel row pair and ``ty``) is the same for
+    The image is cut into tiles of :data:`RADIAL_TILE` pixels of one row, ordered down the image column band by
+    column band; ``items`` parallel work items take consecutive runs of tiles (so a thread's consecutive tiles
+    read nearly the same texels, which stay in its cache) with their buffers allocated once. Per tile, taps outer and pixels inner: the row's ``v`` (and so its texel row pair and ``ty``) is the same for
     every pixel at each tap, each pixel's ``u`` is stepped by the same repeated subtraction as the shaders, and
     the sums stay in a (C, tile) buffer. Per pixel the operations and their order are :func:`_fetch_add`'s, so
     the bits are those of the pixel-by-pixel loop and independent of the thread count and the tiling. ``mode``:
@@ -170,42 +173,47 @@ def _radial_tiles(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay
     outside reads 0 where the clamped index lands in the padding).
     """
     C = img.shape[2]
+    flat = img.reshape(img.size)
+    row = np.uint64(img.shape[1] * C)
     out = np.empty((H, W, C))
     offset = 1 if mode == ADDRESS_BORDER else 0
     lo_x, hi_x = float(-offset), float(W - 1 + offset)
     lo_y, hi_y = float(-offset), float(H - 1 + offset)
     repeat = mode == ADDRESS_REPEAT
-    bands = (W + RADIAL_TILE - 1) // RADIAL_TILE
-    for tile in prange(bands * H):
-        y = tile % H
-        x0 = (tile // H) * RADIAL_TILE
-        n = min(RADIAL_TILE, W - x0)
-        u, du, tx = np.empty(n), np.empty(n), np.empty(n)
-        ia, ib = np.empty(n, np.int64), np.empty(n, np.int64)
-        acc = np.zeros((C, n))
-        for x in range(n):
-            u[x] = (x0 + x + 0.5) / W
-            du[x] = (u[x] - lu) * scale
-        v = (y + 0.5) / H
-        dv = (v - lv) * scale
-        w = 1.0
-        dec = 1.0
-        for i in range(iterations + 1):
-            if i > 0:
-                for x in range(n):
-                    u[x] = u[x] - du[x]
-                v = v - dv
-                w = dec * tap_scale * weight
-                dec = dec * decay
-            yy = v * H - 0.5
-            yf = math.floor(yy)
-            ra = _row_index(yf, H, lo_y, hi_y, offset, repeat)
-            rb = _row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)
-            _tap_columns(u, W, lo_x, hi_x, offset, repeat, tx, ia, ib)
-            _tap_rows(img, ra, rb, yy - yf, tx, ia, ib, w, acc)
-        for x in range(n):
-            for ch in range(C):
-                out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
+    tiles = (W + RADIAL_TILE - 1) // RADIAL_TILE * H
+    items = max(1, min(tiles, items))
+    for item in prange(items):
+        u, du, tx = np.empty(RADIAL_TILE), np.empty(RADIAL_TILE), np.empty(RADIAL_TILE)
+        ia, ib = np.empty(RADIAL_TILE, np.uint64), np.empty(RADIAL_TILE, np.uint64)
+        acc = np.empty((C, RADIAL_TILE))
+        for tile in range(item * tiles // items, (item + 1) * tiles // items):
+            y = tile % H
+            x0 = (tile // H) * RADIAL_TILE
+            n = min(RADIAL_TILE, W - x0)
+            for x in range(n):
+                u[x] = (x0 + x + 0.5) / W
+                du[x] = (u[x] - lu) * scale
+            acc[:] = 0.0
+            v = (y + 0.5) / H
+            dv = (v - lv) * scale
+            w = 1.0
+            dec = 1.0
+            for i in range(iterations + 1):
+                if i > 0:
+                    for x in range(n):
+                        u[x] = u[x] - du[x]
+                    v = v - dv
+                    w = dec * tap_scale * weight
+                    dec = dec * decay
+                yy = v * H - 0.5
+                yf = math.floor(yy)
+                ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
+                rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
+                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
+                _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+            for x in range(n):
+                for ch in range(C):
+                    out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
     return out
 
 
@@ -228,7 +236,8 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
     if address == "border":
         img3 = np.pad(img3, ((1, 1), (1, 1), (0, 0)))
     out = _radial_tiles(img3, H, W, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
-                       float(weight), float(tap_scale), float(decay), mode, float(exposure), float(visibility))
+                       float(weight), float(tap_scale), float(decay), mode, float(exposure), float(visibility),
+                       4 * get_num_threads())
     return out if img.ndim == 3 else out[..., 0]
 
 
