@@ -182,14 +182,14 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     then ``acc / wsum``): the same bits.
 
     The values are read as planes of one line (:func:`_planar_row`), so a tap is one contiguous loop per channel
-    (:func:`_add_tap`). Horizontal: rows in parallel. Vertical: ``blocks`` blocks of rows in parallel; the depth
-    tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
+    (:func:`_add_tap`). ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
+    depth tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
     kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
     work). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
     """
     H, W, C = v.shape
     K = g.size - 1
-    n_items = H if axis == 1 else max(1, min(H, blocks))
+    n_items = max(1, min(H, blocks))
     for b in prange(n_items):
         r0, r1 = b * H // n_items, (b + 1) * H // n_items
         E = np.empty((K + 1, K, W))
