@@ -139,9 +139,12 @@ def _planar_row(v, r, pad, out):
     """``out[ch, pad + c] = v[r, c, ch]``, the row's channels as planes, with ``pad`` copies of the edge texels on
     each side (clamp addressing: tap ``k`` of texel ``c`` is ``out[ch, pad + c + k]`` for ``|k| <= pad``)."""
     W, C = v.shape[1], v.shape[2]
-    for c in range(-pad, W + pad):
-        for ch in range(C):
-            out[ch, pad + c] = v[r, min(max(c, 0), W - 1), ch]
+    for ch in range(C):
+        for c in range(W):
+            out[ch, pad + c] = v[r, c, ch]
+        for c in range(pad):
+            out[ch, c] = v[r, 0, ch]
+            out[ch, pad + W + c] = v[r, W - 1, ch]
 
 
 @njit(cache=True, fastmath=False)
@@ -222,11 +225,10 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
                     for c in range(W):
                         w[c] = gk * E[slot, k - 1, c]
                 elif axis == 1:
-                    for c in range(W):
-                        if c + k >= 0:
-                            w[c] = gk * E[slot, -k - 1, c + k]
-                        else:
-                            w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
+                    for c in range(min(-k, W)):
+                        w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
+                    for c in range(-k, W):
+                        w[c] = gk * E[slot, -k - 1, c + k]
                 elif r + k >= 0:
                     for c in range(W):
                         w[c] = gk * E[(r + k) % (K + 1), -k - 1, c]
