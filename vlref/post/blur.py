@@ -13,9 +13,11 @@ Depth weight ``W_k`` of a tap with depth difference ``dz = |z_k - z_0|`` (:func:
 ``inf - inf = 0`` so sky matches sky): ``"gaussian"`` ``exp(-(dz * c) * (dz * c))`` (VL, URP) or
 ``"inverse"`` ``1 / (dz + eps)`` (the thesis's "in the same way as the bilateral up-sampling").
 
-Every pass runs one Numba kernel (:func:`_blur_lines`) over tap tables built here: per texel along
+The URP passes run one Numba kernel (:func:`_blur_lines`) over tap tables built here: per texel along
 the axis, the value texel and depth texel of each tap, in summation order. Vertical maps of the
 passes defined in Unity's uv are turned into array rows (:func:`~vlref.post.resolution.uv_row_map`).
+:func:`bilateral_pass` (thesis, VL), whose taps are symmetric integer offsets, runs
+:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels.
 """
 
 from __future__ import annotations
