@@ -174,6 +174,59 @@ def _finish_line(acc, wsum, out, r):
             out[r, c, ch] = acc[ch, c]
 
 
+@njit(cache=True, fastmath=False)
+def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
+    """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
+    kernel small, which is most of its compile time)."""
+    H, W, C = v.shape
+    K = g.size - 1
+    E = np.empty((K + 1, K, W))
+    centre = np.empty((K + 1, W))
+    rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
+    acc = np.empty((C, W))
+    wsum = np.empty(W)
+    w = np.empty(W)
+    if axis == 0:
+        for p in range(max(r0 - K, 0), min(r0 + K, H)):
+            _planar_row(v, p, 0, rows[p % (2 * K + 1)])
+    for r in range(r0 if axis == 1 else max(r0 - K, 0), r1):
+        slot = r % (K + 1)
+        _pair_tables(z, r, axis, code, factor, epsilon, E[slot], centre[slot])
+        if r < r0:
+            continue
+        if axis == 1:
+            _planar_row(v, r, K, rows[0])
+        elif r + K <= H - 1:
+            _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
+        acc[:] = 0.0
+        wsum[:] = 0.0
+        for t in range(2 * K + 1):
+            k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
+            gk = g[abs(k)]
+            if k == 0:
+                for c in range(W):
+                    w[c] = gk * centre[slot, c]
+            elif k > 0:
+                for c in range(W):
+                    w[c] = gk * E[slot, k - 1, c]
+            elif axis == 1:
+                for c in range(min(-k, W)):
+                    w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
+                for c in range(-k, W):
+                    w[c] = gk * E[slot, -k - 1, c + k]
+            elif r + k >= 0:
+                for c in range(W):
+                    w[c] = gk * E[(r + k) % (K + 1), -k - 1, c]
+            else:
+                for c in range(W):
+                    w[c] = gk * (centre[0, c] if r == 0 else E[0, r - 1, c])
+            if axis == 1:
+                _add_tap(w, rows, 0, K + k, acc, wsum)
+            else:
+                _add_tap(w, rows, min(max(r + k, 0), H - 1) % (2 * K + 1), 0, acc, wsum)
+        _finish_line(acc, wsum, out, r)
+
+
 @njit(cache=True, fastmath=False, parallel=True)
 def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     """:func:`_blur_lines` for :func:`bilateral_pass`'s taps (offsets ``0, -K..-1, 1..K``, value and depth at the same
@@ -192,56 +245,10 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
     work). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
     """
-    H, W, C = v.shape
-    K = g.size - 1
+    H = v.shape[0]
     n_items = max(1, min(H, blocks))
     for b in prange(n_items):
-        r0, r1 = b * H // n_items, (b + 1) * H // n_items
-        E = np.empty((K + 1, K, W))
-        centre = np.empty((K + 1, W))
-        rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
-        acc = np.empty((C, W))
-        wsum = np.empty(W)
-        w = np.empty(W)
-        if axis == 0:
-            for p in range(max(r0 - K, 0), min(r0 + K, H)):
-                _planar_row(v, p, 0, rows[p % (2 * K + 1)])
-        for r in range(r0 if axis == 1 else max(r0 - K, 0), r1):
-            slot = r % (K + 1)
-            _pair_tables(z, r, axis, code, factor, epsilon, E[slot], centre[slot])
-            if r < r0:
-                continue
-            if axis == 1:
-                _planar_row(v, r, K, rows[0])
-            elif r + K <= H - 1:
-                _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
-            acc[:] = 0.0
-            wsum[:] = 0.0
-            for t in range(2 * K + 1):
-                k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
-                gk = g[abs(k)]
-                if k == 0:
-                    for c in range(W):
-                        w[c] = gk * centre[slot, c]
-                elif k > 0:
-                    for c in range(W):
-                        w[c] = gk * E[slot, k - 1, c]
-                elif axis == 1:
-                    for c in range(min(-k, W)):
-                        w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
-                    for c in range(-k, W):
-                        w[c] = gk * E[slot, -k - 1, c + k]
-                elif r + k >= 0:
-                    for c in range(W):
-                        w[c] = gk * E[(r + k) % (K + 1), -k - 1, c]
-                else:
-                    for c in range(W):
-                        w[c] = gk * (centre[0, c] if r == 0 else E[0, r - 1, c])
-                if axis == 1:
-                    _add_tap(w, rows, 0, K + k, acc, wsum)
-                else:
-                    _add_tap(w, rows, min(max(r + k, 0), H - 1) % (2 * K + 1), 0, acc, wsum)
-            _finish_line(acc, wsum, out, r)
+        _bilateral_block(v, z, axis, g, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, out)
 
 
 def _line_buffers(v):
