@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 
 from post_cases import depth_image, image, raw_depth, sizes
-from vlref.post.blur import (URP_GAUSS_WEIGHTS, blur_hv, gaussian_weights, thesis_blur_pass, urp_article_blur_pass,
-                             urp_repo_blur_pass, vl_blur_pass)
+from vlref.post.blur import (URP_GAUSS_WEIGHTS, _bilateral_lines, _weight_code, bilateral_pass, blur_hv,
+                             gaussian_weights, thesis_blur_pass, urp_article_blur_pass, urp_repo_blur_pass, vl_blur_pass)
 
 RTOL = 1e-12   # numpy's exp and math.exp may differ by an ulp; everything else is the same arithmetic
 
@@ -72,6 +72,40 @@ def test_vl_pass_matches_reference_and_keeps_alpha(case):
             ref = int_offset_reference(v, z, axis, g, lambda d: math.exp(-(d * 0.5) * (d * 0.5)), keep_alpha=True)
             np.testing.assert_allclose(out, ref, rtol=RTOL, atol=0)
             assert (out[..., 3] == v[..., 3]).all()
+
+
+WEIGHT_KINDS = [("gaussian", 0.7, lambda d: math.exp(-(d * 0.7) * (d * 0.7))),
+                ("gaussian", 0.0, lambda d: 1.0),
+                ("inverse", 1.0, lambda d: 1.0 / (d + 1e-3))]
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (2, 9), (9, 2), (5, 6), (13, 11)])
+def test_bilateral_pass_same_bits_as_the_pixel_loop(shape):
+    # each depth weight is computed once per pair of texels and serves both of their taps (|a - b| == |b - a|),
+    # sums vectorised over a line: still the pixel loop's bits, for every radius (wider than the image too),
+    # weight kind, sky and flat depth, and clamped edge
+    H, W = shape
+    rng = np.random.default_rng(31 * H + W)
+    v, z = image(rng, H, W, 3), depth_image(rng, H, W)
+    for K in (1, 3, 7):
+        g = gaussian_weights(K, K / 1.5)
+        for kind, factor, weight in WEIGHT_KINDS:
+            for axis in (0, 1):
+                got = bilateral_pass(v, z, axis, g, factor, kind, 1e-3)
+                assert np.array_equal(got, int_offset_reference(v, z, axis, g, weight)), (K, kind, factor, axis)
+
+
+def test_bilateral_pass_independent_of_the_blocks():
+    # the vertical pass recomputes the depth weights of the K rows above each block: any blocking, same bits
+    rng = np.random.default_rng(8)
+    v, z = image(rng, 17, 6, 2), depth_image(rng, 17, 6)
+    g = gaussian_weights(3, 2.0)
+    runs = []
+    for blocks in (1, 2, 5, 17, 40):
+        out = np.empty_like(v)
+        _bilateral_lines(v, z, 0, g, _weight_code("gaussian", 1.0, 1.0), 1.0, 1.0, blocks, out)
+        runs.append(out)
+    assert all(np.array_equal(runs[0], r) for r in runs[1:])
 
 
 def urp_reference(fog, zf, axis, taps_lo, taps_hi, centre_hi, n):

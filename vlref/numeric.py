@@ -31,7 +31,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, overload
 
-__all__ = ["cast", "zero_one", "exp", "expm1", "fma", "prefer_wide_vectors"]
+__all__ = ["cast", "zero_one", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap"]
 
 
 def cast(like, value):
@@ -98,6 +98,23 @@ def prefer_wide_vectors(typingctx):
             set.add(attributes, '"prefer-vector-width"="512"')
         except (TypeError, AttributeError):  # an llvmlite that keeps them otherwise: its default width, the same bits
             pass
+        return context.get_dummy_value()
+
+    return types.none(), codegen
+
+
+@intrinsic
+def arrays_do_not_overlap(typingctx):
+    """Called first in an njit function whose array arguments are distinct arrays (no two share memory): tells LLVM
+    so (the ``noalias`` attribute on every pointer argument of the function being compiled, what Numba's internal
+    ``noalias`` flag does). A loop that stores to one array and reads another at computed indices (a gather) can
+    then be vectorised; without it LLVM must assume the store may change what a later lane reads. Calling it in a
+    function that is passed overlapping arrays is undefined behaviour. The same bits where the promise holds: it
+    allows reordering memory accesses, not changing arithmetic."""
+    def codegen(context, builder, signature, args):
+        for argument in context.call_conv.get_arguments(builder.function):
+            if isinstance(argument.type, ir.PointerType):
+                argument.add_attribute("noalias")
         return context.get_dummy_value()
 
     return types.none(), codegen

@@ -13,9 +13,11 @@ Depth weight ``W_k`` of a tap with depth difference ``dz = |z_k - z_0|`` (:func:
 ``inf - inf = 0`` so sky matches sky): ``"gaussian"`` ``exp(-(dz * c) * (dz * c))`` (VL, URP) or
 ``"inverse"`` ``1 / (dz + eps)`` (the thesis's "in the same way as the bilateral up-sampling").
 
-Every pass runs one Numba kernel (:func:`_blur_lines`) over tap tables built here: per texel along
+The URP passes run one Numba kernel (:func:`_blur_lines`) over tap tables built here: per texel along
 the axis, the value texel and depth texel of each tap, in summation order. Vertical maps of the
 passes defined in Unity's uv are turned into array rows (:func:`~vlref.post.resolution.uv_row_map`).
+:func:`bilateral_pass` (thesis, VL), whose taps are symmetric integer offsets, runs
+:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels.
 """
 
 from __future__ import annotations
@@ -23,8 +25,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit, prange
 
+from vlref.numeric import arrays_do_not_overlap
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
@@ -119,10 +122,144 @@ def _blur_lines(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor, epsi
                 out[r, c, ch] /= wsum[c]
 
 
+@njit(cache=True, fastmath=False)
+def _pair_tables(z, r, axis, code, factor, epsilon, E, centre):
+    """The depth weights of line ``r`` (a row of ``z``) against its neighbours along ``axis``:
+    ``E[m - 1, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
+    ``centre[c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``)."""
+    H, W = z.shape
+    for m in range(1, E.shape[0] + 1):
+        for c in range(W):
+            tap = z[r, min(c + m, W - 1)] if axis == 1 else z[min(r + m, H - 1), c]
+            E[m - 1, c] = _depth_weight(depth_delta_at(tap, z[r, c]), code, factor, epsilon)
+    for c in range(W):
+        centre[c] = _depth_weight(depth_delta_at(z[r, c], z[r, c]), code, factor, epsilon)
+
+
+@njit(cache=True, fastmath=False)
+def _planar_row(v, r, pad, out):
+    """``out[ch, pad + c] = v[r, c, ch]``, the row's channels as planes, with ``pad`` copies of the edge texels on
+    each side (clamp addressing: tap ``k`` of texel ``c`` is ``out[ch, pad + c + k]`` for ``|k| <= pad``)."""
+    W, C = v.shape[1], v.shape[2]
+    for ch in range(C):
+        for c in range(W):
+            out[ch, pad + c] = v[r, c, ch]
+        for c in range(pad):
+            out[ch, c] = v[r, 0, ch]
+            out[ch, pad + W + c] = v[r, W - 1, ch]
+
+
+@njit(cache=True, fastmath=False)
+def _add_tap(w, rows, row, shift, acc, wsum):
+    """``acc[ch, c] += w[c] * rows[row, ch, c + shift]``, ``wsum[c] += w[c]``: one tap for a whole line
+    (vectorised)."""
+    arrays_do_not_overlap()
+    for c in range(w.size):
+        wsum[c] += w[c]
+    for ch in range(acc.shape[0]):
+        for c in range(w.size):
+            acc[ch, c] += w[c] * rows[row, ch, c + shift]
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _finish_line(acc, wsum, out, r):
+    """``out[r, c, ch] = acc[ch, c] / wsum[c]`` (vectorised: NumPy's error model, so a zero ``wsum`` would give
+    ``inf``/NaN rather than raise; the centre tap's weight keeps it positive)."""
+    arrays_do_not_overlap()
+    for ch in range(acc.shape[0]):
+        for c in range(wsum.size):
+            acc[ch, c] = acc[ch, c] / wsum[c]
+    for c in range(wsum.size):
+        for ch in range(acc.shape[0]):
+            out[r, c, ch] = acc[ch, c]
+
+
+@njit(cache=True, fastmath=False)
+def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
+    """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
+    kernel small, which is most of its compile time)."""
+    H, W, C = v.shape
+    K = g.size - 1
+    E = np.empty((K + 1, K, W))
+    centre = np.empty((K + 1, W))
+    rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
+    acc = np.empty((C, W))
+    wsum = np.empty(W)
+    w = np.empty(W)
+    if axis == 0:
+        for p in range(max(r0 - K, 0), min(r0 + K, H)):
+            _planar_row(v, p, 0, rows[p % (2 * K + 1)])
+    for r in range(r0 if axis == 1 else max(r0 - K, 0), r1):
+        slot = r % (K + 1)
+        _pair_tables(z, r, axis, code, factor, epsilon, E[slot], centre[slot])
+        if r < r0:
+            continue
+        if axis == 1:
+            _planar_row(v, r, K, rows[0])
+        elif r + K <= H - 1:
+            _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
+        acc[:] = 0.0
+        wsum[:] = 0.0
+        for t in range(2 * K + 1):
+            k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
+            gk = g[abs(k)]
+            if k == 0:
+                for c in range(W):
+                    w[c] = gk * centre[slot, c]
+            elif k > 0:
+                for c in range(W):
+                    w[c] = gk * E[slot, k - 1, c]
+            elif axis == 1:
+                for c in range(min(-k, W)):
+                    w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
+                for c in range(-k, W):
+                    w[c] = gk * E[slot, -k - 1, c + k]
+            elif r + k >= 0:
+                for c in range(W):
+                    w[c] = gk * E[(r + k) % (K + 1), -k - 1, c]
+            else:
+                for c in range(W):
+                    w[c] = gk * (centre[0, c] if r == 0 else E[0, r - 1, c])
+            if axis == 1:
+                _add_tap(w, rows, 0, K + k, acc, wsum)
+            else:
+                _add_tap(w, rows, min(max(r + k, 0), H - 1) % (2 * K + 1), 0, acc, wsum)
+        _finish_line(acc, wsum, out, r)
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
+    """:func:`_blur_lines` for :func:`bilateral_pass`'s taps (offsets ``0, -K..-1, 1..K``, value and depth at the same
+    texel, clamped), each depth weight computed once and the sums vectorised over a line.
+
+    ``W(dz)`` of two texels ``m`` apart serves the tap ``+m`` of one and the tap ``-m`` of the other (``dz`` is
+    symmetric: ``|a - b| = |b - a|`` exactly in floating point, :func:`depth_delta_at`), so a pixel costs ``K``
+    weights, not ``2K`` (:func:`_pair_tables`): tap ``-m`` at position ``p`` is tap ``+m`` at ``p - m``, and a tap
+    clamped to position 0 is position 0's tap ``+p`` (``p = 0``: its centre weight). Per pixel the same operations
+    in the same order as :func:`_blur_lines` (``w = g_|k| W``, ``acc += w v``, ``wsum += w`` from 0, tap by tap,
+    then ``acc / wsum``): the same bits.
+
+    The values are read as planes of one line (:func:`_planar_row`), so a tap is one contiguous loop per channel
+    (:func:`_add_tap`). ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
+    depth tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
+    kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
+    work). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
+    """
+    H = v.shape[0]
+    n_items = max(1, min(H, blocks))
+    for b in prange(n_items):
+        _bilateral_block(v, z, axis, g, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, out)
+
+
+def _line_buffers(v):
+    """``v`` (``(H, W)`` or ``(H, W, C)``) as a contiguous ``(H, W, C)`` array, and an output of that shape."""
+    v3 = np.ascontiguousarray(v).reshape(v.shape[0], v.shape[1], -1)
+    return v3, np.empty(v3.shape)
+
+
 def _run_blur(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor=1.0, epsilon=1.0) -> np.ndarray:
     """:func:`_blur_lines` on ``(H, W)`` or ``(H, W, C)`` values; returns the shape of ``v``."""
-    v3 = np.ascontiguousarray(v).reshape(v.shape[0], v.shape[1], -1)
-    out = np.empty(v3.shape)
+    v3, out = _line_buffers(v)
     _blur_lines(v3, np.ascontiguousarray(z), axis, np.ascontiguousarray(taps_v, dtype=np.int64),
                 np.ascontiguousarray(taps_z, dtype=np.int64), np.ascontiguousarray(centre, dtype=np.int64),
                 np.ascontiguousarray(cross, dtype=np.int64), np.asarray(g, dtype=np.float64), code, float(factor),
@@ -162,13 +299,10 @@ def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, d
     if keep_alpha and v.ndim != 3:
         raise ValueError("values: keep_alpha needs an (H, W, C) buffer")
     code = _weight_code(depth_weight_kind, depth_factor, epsilon)
-    g = np.asarray(gauss, dtype=np.float64)
-    radius = len(g) - 1
-    k = np.array([0] + list(range(-radius, 0)) + list(range(1, radius + 1)), dtype=np.int64)
-    n = v.shape[axis]
-    taps = np.clip(np.arange(n)[:, None] + k[None, :], 0, n - 1)
-    out = _run_blur(v, z, axis, taps, taps, np.arange(n), np.arange(v.shape[1 - axis]), g[np.abs(k)], code,
-                    depth_factor, epsilon)
+    v3, out = _line_buffers(v)
+    _bilateral_lines(v3, np.ascontiguousarray(z), axis, np.asarray(gauss, dtype=np.float64), code, float(depth_factor),
+                     float(epsilon), 2 * get_num_threads(), out)
+    out = out.reshape(v.shape)
     if keep_alpha:
         out[..., -1] = v[..., -1]
     return out

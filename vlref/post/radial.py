@@ -26,8 +26,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import get_num_threads, njit, prange
 
+from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
 from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
@@ -96,77 +97,133 @@ def bilinear_sample(image, u, v, address: str = "clamp") -> np.ndarray:
     return out.reshape(u.shape + img.shape[2:])
 
 
-@njit(cache=True, fastmath=False, inline="always")
-def _index(i, n, lo, hi, offset, repeat):
-    """Array index of texel ``i`` of ``n``: ``i mod n`` when ``repeat``, else ``clamp(i, lo, hi) + offset``."""
-    return i % n if repeat else min(max(i, lo), hi) + offset
+RADIAL_TILE = 256
+"""Pixels of one row that the radial kernel carries through all its taps at once (:func:`_radial_tiles`)."""
 
 
 @njit(cache=True, fastmath=False)
-def _row_taps(img, H, W, u, v, w, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y):
-    """``out[y, x] += w * bilinear(img, u[x], v)`` for every ``x`` of one row: one texel row pair for the whole row.
+def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
+    """Per pixel ``x < n`` of a tile: ``tx``, and where the texels left and right of ``u W - 1/2`` start in an image row of
+    ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check).
 
-    ``H``, ``W``: the image's size (``img`` may be padded by ``offset`` texels of 0 on every side, see
-    :func:`_radial_rows`); the arithmetic is :func:`_fetch_add`'s, operation for operation.
+    Texel ``i`` is column ``i mod W`` when ``repeat``, else ``clamp(i, lo, hi) + offset``; the clamp is taken on
+    the integral float ``floor(x)`` (the same index as clamping the integer, and no integer overflow far off
+    screen). :func:`_fetch_add`'s arithmetic, operation for operation.
     """
-    yy = v * H - 0.5
-    yf = math.floor(yy)
-    ty = yy - yf
-    row_a = img[_index(int(yf), H, lo_y, hi_y, offset, repeat)]
-    row_b = img[_index(int(yf) + 1, H, lo_y, hi_y, offset, repeat)]
+    prefer_wide_vectors()
+    if repeat:
+        for x in range(n):
+            xx = u[x] * W - 0.5
+            xf = math.floor(xx)
+            tx[x] = xx - xf
+            ia[x] = (int(xf) % W) * C
+            ib[x] = ((int(xf) + 1) % W) * C
+    else:
+        for x in range(n):
+            xx = u[x] * W - 0.5
+            xf = math.floor(xx)
+            tx[x] = xx - xf
+            ia[x] = (int(min(max(xf, lo), hi)) + offset) * C
+            ib[x] = (int(min(max(xf + 1.0, lo), hi)) + offset) * C
+
+
+@njit(cache=True, fastmath=False)
+def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
+    """``acc[ch, x] += w * bilinear(...)`` for every pixel ``x < n`` of a tile and channel ``ch``: the texel rows start at
+    ``ra``, ``rb`` in the flattened image ``flat``, the texels at ``ia[x]``, ``ib[x]`` in a row
+    (:func:`_tap_columns`); bilinear as ``a + t (b - a)`` along x, then y (:func:`_fetch_add`'s order).
+
+    One channel at a time over the tile's pixels: the loop has no inner loop, its stores (``acc``) cannot change
+    what it reads (``flat``, declared with :func:`~vlref.numeric.arrays_do_not_overlap`) and its indices are
+    unsigned sums (no sign checks, no multiplies), so LLVM vectorises it, the texel reads as gathers.
+    """
+    prefer_wide_vectors()
+    arrays_do_not_overlap()
+    for ch in range(acc.shape[0]):
+        a0, b0 = ra + np.uint64(ch), rb + np.uint64(ch)
+        for x in range(n):
+            a, b, t = ia[x], ib[x], tx[x]
+            t00 = flat[a0 + a]
+            t10 = flat[a0 + b]
+            t01 = flat[b0 + a]
+            t11 = flat[b0 + b]
+            top = t00 + t * (t10 - t00)
+            bottom = t01 + t * (t11 - t01)
+            acc[ch, x] = acc[ch, x] + (top + ty * (bottom - top)) * w
+
+
+@njit(cache=True, fastmath=False)
+def _row_index(yf, n, lo, hi, offset, repeat):
+    """Array row of texel row ``yf`` (an integral float) of ``n``: ``yf mod n`` when ``repeat``, else
+    ``clamp(yf, lo, hi) + offset`` (clamped as :func:`_tap_columns` does)."""
+    return int(yf) % n if repeat else int(min(max(yf, lo), hi)) + offset
+
+
+@njit(cache=True, fastmath=False)
+def _radial_run(img, H, W, loop, mode, first, last, out):
+    """Tiles ``first <= tile < last`` of :func:`_radial_tiles` (one work item; a separate function keeps the
+    parallel kernel small, which is most of its compile time)."""
+    lu, lv, scale, iterations, weight, tap_scale, decay, exposure, visibility = loop
     C = img.shape[2]
-    for x in range(u.size):
-        xx = u[x] * W - 0.5
-        xf = math.floor(xx)
-        tx = xx - xf
-        xa = _index(int(xf), W, lo_x, hi_x, offset, repeat)
-        xb = _index(int(xf) + 1, W, lo_x, hi_x, offset, repeat)
-        for ch in range(C):
-            t00 = row_a[xa, ch]
-            t10 = row_a[xb, ch]
-            t01 = row_b[xa, ch]
-            t11 = row_b[xb, ch]
-            top = t00 + tx * (t10 - t00)
-            bottom = t01 + tx * (t11 - t01)
-            out[y, x, ch] = out[y, x, ch] + (top + ty * (bottom - top)) * w
+    flat = img.reshape(img.size)
+    row = np.uint64(img.shape[1] * C)
+    offset = 1 if mode == ADDRESS_BORDER else 0
+    lo_x, hi_x = float(-offset), float(W - 1 + offset)
+    lo_y, hi_y = float(-offset), float(H - 1 + offset)
+    repeat = mode == ADDRESS_REPEAT
+    u, du, tx = np.empty(RADIAL_TILE), np.empty(RADIAL_TILE), np.empty(RADIAL_TILE)
+    ia, ib = np.empty(RADIAL_TILE, np.uint64), np.empty(RADIAL_TILE, np.uint64)
+    acc = np.empty((C, RADIAL_TILE))
+    for tile in range(first, last):
+        y = tile % H
+        x0 = (tile // H) * RADIAL_TILE
+        n = min(RADIAL_TILE, W - x0)
+        for x in range(n):
+            u[x] = (x0 + x + 0.5) / W
+            du[x] = (u[x] - lu) * scale
+        acc[:] = 0.0
+        v = (y + 0.5) / H
+        dv = (v - lv) * scale
+        w = 1.0
+        dec = 1.0
+        for i in range(iterations + 1):
+            if i > 0:
+                for x in range(n):
+                    u[x] = u[x] - du[x]
+                v = v - dv
+                w = dec * tap_scale * weight
+                dec = dec * decay
+            yy = v * H - 0.5
+            yf = math.floor(yy)
+            ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
+            rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
+            _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
+            _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+        for x in range(n):
+            for ch in range(C):
+                out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _radial_rows(img, H, W, lu, lv, scale, iterations, weight, tap_scale, decay, mode, exposure, visibility):
-    """Listing 13-1 on every pixel, then ``(C * exposure) * visibility``: (H, W, C).
+def _radial_tiles(img, H, W, loop, mode, items):
+    """Listing 13-1 on every pixel, then ``(C * exposure) * visibility``: (H, W, C). ``loop``: ``(lu, lv, scale,
+    iterations, weight, tap_scale, decay, exposure, visibility)`` (:func:`_radial_loop`).
 
-    One output row per iteration, taps outer and pixels inner: the row's ``v`` (and so its texel row pair
-    and ``ty``) is the same for every pixel at each tap, and each pixel's ``u`` is stepped by the same
-    repeated subtraction as the shaders (a row buffer). Per pixel the operations and their order are
-    :func:`_fetch_add`'s, so the bits are those of the pixel-by-pixel loop and independent of the thread
-    count. ``mode``: an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0 on every side
-    (a tap outside reads 0 where the clamped index lands in the padding).
+    The image is cut into tiles of :data:`RADIAL_TILE` pixels of one row, ordered down the image column band by
+    column band; ``items`` parallel work items take consecutive runs of tiles (:func:`_radial_run`: a thread's
+    consecutive tiles read nearly the same texels, which stay in its cache; buffers allocated once per run). Per
+    tile, taps outer and pixels inner: the row's ``v`` (and so its texel row pair and ``ty``) is the same for
+    every pixel at each tap, each pixel's ``u`` is stepped by the same repeated subtraction as the shaders, and
+    the sums stay in a (C, tile) buffer. Per pixel the operations and their order are :func:`_fetch_add`'s, so
+    the bits are those of the pixel-by-pixel loop and independent of the thread count and the tiling. ``mode``:
+    an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0 on every side (a tap
+    outside reads 0 where the clamped index lands in the padding).
     """
-    C = img.shape[2]
-    out = np.zeros((H, W, C))
-    offset = 1 if mode == ADDRESS_BORDER else 0
-    lo_x, hi_x = -offset, W - 1 + offset
-    lo_y, hi_y = -offset, H - 1 + offset
-    repeat = mode == ADDRESS_REPEAT
-    for y in prange(H):
-        u = np.empty(W)
-        du = np.empty(W)
-        for x in range(W):
-            u[x] = (x + 0.5) / W
-            du[x] = (u[x] - lu) * scale
-        v = (y + 0.5) / H
-        dv = (v - lv) * scale
-        _row_taps(img, H, W, u, v, 1.0, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y)
-        dec = 1.0
-        for _ in range(iterations):
-            for x in range(W):
-                u[x] = u[x] - du[x]
-            v = v - dv
-            _row_taps(img, H, W, u, v, dec * tap_scale * weight, lo_x, hi_x, lo_y, hi_y, offset, repeat, out, y)
-            dec = dec * decay
-        for x in range(W):
-            for ch in range(C):
-                out[y, x, ch] = (out[y, x, ch] * exposure) * visibility
+    out = np.empty((H, W, img.shape[2]))
+    tiles = (W + RADIAL_TILE - 1) // RADIAL_TILE * H
+    items = max(1, min(tiles, items))
+    for item in prange(items):
+        _radial_run(img, H, W, loop, mode, item * tiles // items, (item + 1) * tiles // items, out)
     return out
 
 
@@ -188,8 +245,9 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
     mode = ADDRESS_MODES.index(address)
     if address == "border":
         img3 = np.pad(img3, ((1, 1), (1, 1), (0, 0)))
-    out = _radial_rows(img3, H, W, float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations),
-                       float(weight), float(tap_scale), float(decay), mode, float(exposure), float(visibility))
+    loop = (float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations), float(weight),
+            float(tap_scale), float(decay), float(exposure), float(visibility))
+    out = _radial_tiles(img3, H, W, loop, mode, 4 * get_num_threads())
     return out if img.ndim == 3 else out[..., 0]
 
 
