@@ -28,19 +28,8 @@ import fx_port  # noqa: E402
 import kz_scene  # noqa: E402
 from fx_variants import VARIANTS  # noqa: E402
 
-PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-sampled"),
-          ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
-          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-sampled"), ("transmittance", "gpu-sampled"),
-          ("final", "gpu-sampled"))
-"""(buffer, preset). The slice boundaries are float32 host values: ``float32``. The grids are rgba16float,
-one fp16 rounding per store: ``gpu-full``, but for what the port reads through the hardware trilinear
-sampler, whose sub-texel weights are 8-bit fractions on real GPUs (up to 1/512 of the difference between
-neighbouring texels, which across a shadow shaft or along depth can be as large as the value itself):
-the history (fetched at the reprojected position) and the apply outputs take ``gpu-sampled``: ``gpu-half``
-per texel (it states that it absorbs 8-bit filtering weights) plus a bounded share of texels, since vlref builds
-no geometric zone for 3-D grids. Measured on an H100 (README): with a moving camera and sharp
-shafts the history fails ``gpu-full`` (35 of 3840 froxels, 1.8x) and the apply outputs do (1.4x); the frame
-counts, fetched the same way but nearly constant, stay within ``gpu-full``."""
+PASSES = fx_port.PASSES
+"""(buffer, preset) of every exported pass (:data:`fx_port.PASSES`, which says why each preset)."""
 
 APPLY_BUFFERS = ("inscatter", "transmittance", "final")
 """The apply pass's outputs: the only ones read through the hardware trilinear sampler of the integrated grid."""
@@ -124,27 +113,16 @@ def timing(scene_ref: str, size: str, grid: str, frames: int, dev=None) -> tuple
     return kind, mean[0], mean[1]
 
 
-def verdict_manifest(manifest: Path) -> Path:
-    """Add to an exported frame's manifest what ``vlref verdict`` reads (branch i24-verdict, NOTES.md): the
-    port's ``final`` and a ``[[passes]]`` entry per :data:`PASSES` buffer but ``froxel_history_valid`` (all
-    zero on a first frame, which the verdict refuses as proving nothing)."""
-    top = 'colour = "colour.npy"\n'
-    text = manifest.read_text().replace(top, top + 'final = "port_final.npy"\n', 1)
-    for name, preset in PASSES:
-        if name != "froxel_history_valid":
-            text += f'\n[[passes]]\nname = "{name}"\nbuffer = "{name}"\npath = "port_{name}.npy"\npreset = "{preset}"\n'
-    manifest.write_text(text)
-    return manifest
+def sequence_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path, variant: str = "faithful",
+                     cache: dict | None = None):
+    """The whole-frame verdict of every frame (``vlref verdict frame_0000/port.toml frame_0001/port.toml ...``,
+    :func:`vlref.oracle.verdict.judge_sequence`): each frame's passes on the port's own buffers against vlref's
+    march carrying its history, and its raster inputs and final frame against vlref's render of that frame
+    carrying its own; ``cache`` shares vlref's renders and marches between variants."""
+    from vlref.oracle.verdict import judge_sequence
 
-
-def scene_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path):
-    """The whole-frame verdict (``vlref.oracle.verdict.judge``: own buffers and against the scene) of the
-    faithful port's first frame. The verdict marches one manifest without history, so of a temporal sequence
-    only the first frame, which has none on either side, is comparable."""
-    from vlref.oracle.verdict import judge   # branch i24-verdict; absent before it is merged
-
-    first = fx_port.export(port, out_dir, scene_ref, overrides, port.run("faithful"))[0]
-    return judge(verdict_manifest(first), out_dir=out_dir / "verdict")
+    manifests = fx_port.export(port, out_dir, scene_ref, overrides, port.run(variant))
+    return judge_sequence(manifests, out_dir=out_dir / "verdict", cache=cache)
 
 
 def main(argv=None) -> int:
@@ -158,8 +136,8 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", default=None, help="keep the exported buffers here")
     ap.add_argument("--timing-size", default=None, help="also time the passes at WxH (e.g. 1920x1080)")
     ap.add_argument("--timing-grid", default="160x90x64", help="grid of the timing run (default 160x90x64)")
-    ap.add_argument("--verdict", action="store_true", help="also judge each scene's first frame with `vlref "
-                    "verdict` (own buffers and against the scene; needs vlref.oracle.verdict)")
+    ap.add_argument("--verdict", action="store_true", help="also judge every frame of each scene with `vlref "
+                    "verdict` (own buffers and against the scene, history carried on both sides)")
     args = ap.parse_args(argv)
     w, h = args.size.lower().split("x")
     gw, gh, d = args.grid.lower().split("x")
@@ -187,8 +165,9 @@ def main(argv=None) -> int:
                   f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {fr:.3f}x | "
                   f"{me:.3f}x |")
         if args.verdict:
-            v = scene_verdict(port, scene, overrides, out / f"{scene}_verdict")
-            print(f"\n`vlref verdict` of frame 0: {'PASS' if v.passed else 'FAIL'}\n\n{v.table()}")
+            v = sequence_verdict(port, scene, overrides, out / f"{scene}_verdict")
+            ok &= v.passed
+            print(f"\n`vlref verdict` of the {args.frames} frames: {'PASS' if v.passed else 'FAIL'}\n\n{v.table()}")
         for name in ("faithful", "weights8"):
             frames = port.run(name)
             reps = [(f, b, compare(refs[f][b], frames[f][b], "gpu-full")) for f in range(len(refs))
