@@ -116,8 +116,7 @@ class KillzonePort:
         self.adapter, self.device = dev if dev is not None else device()
         self.scene = scene
         self._check_scene(scene)
-        spec = VARIANTS[raster_variant]
-        self.raster_overrides = spec.overrides if spec.raster else {}
+        self.raster_overrides = self.raster_switches(raster_variant)
         self.cam = kz_scene.camera_setup(scene)
         W, H = self.cam.width, self.cam.height
         f = RES_FACTOR[kz_scene.resolved(scene, "resolution")]
@@ -126,8 +125,7 @@ class KillzonePort:
         self.timings: dict[str, float] = {}
         d = self.device
         self._fence = d.create_buffer(size=4, usage=wgpu.BufferUsage.COPY_SRC | wgpu.BufferUsage.COPY_DST)
-        self.globals = self._buffer(kz_scene.globals_block(scene, self.cam, self.low, p.upsample_epsilon,
-                                                           p.blur_sigma), wgpu.BufferUsage.UNIFORM)
+        self.globals = self.globals_buffer(self.cam)
         self.layers, layer, cascade = [], 0, 0   # per light: first layer of `shadow` (first cascade: directional)
         for light in scene.lights:
             shadowed = light.shadows is not None and light.shadows.enabled
@@ -151,6 +149,13 @@ class KillzonePort:
                                        usage=rt)
         self.rt_usage = rt
         self.render_scene()
+
+    @staticmethod
+    def raster_switches(variant: str) -> dict:
+        """The WGSL override constants of passes 1-3 under ``variant`` (:mod:`kz_variants`): a raster variant's
+        switches, none for the others."""
+        spec = VARIANTS[variant]
+        return spec.overrides if spec.raster else {}
 
     @staticmethod
     def _check_scene(scene):
@@ -190,6 +195,12 @@ class KillzonePort:
             raise ValueError("the wgpu port does not implement: " + ", ".join(problems))
 
     # ----------------------------------------------------------------------------------- helpers
+
+    def globals_buffer(self, cam: kz_scene.CameraSetup):
+        """The ``Globals`` uniform (common.wgsl) of the scene seen by ``cam``."""
+        p = self.scene.techniques.killzone
+        return self._buffer(kz_scene.globals_block(self.scene, cam, self.low, p.upsample_epsilon, p.blur_sigma),
+                            self.wgpu.BufferUsage.UNIFORM)
 
     def _buffer(self, array: np.ndarray, usage):
         data = np.ascontiguousarray(array, dtype=np.float32)
@@ -344,13 +355,14 @@ class KillzonePort:
                                             usage=self.rt_usage)
         if not blocks:
             return
-        module = d.create_shader_module(code=(SHADERS / "shadow.wgsl").read_text() + "\n"
-                                        + (SHADERS / "cascade.wgsl").read_text())
+        source = (SHADERS / "shadow.wgsl").read_text() + "\n" + (SHADERS / "cascade.wgsl").read_text()
+        module = d.create_shader_module(code=source)
         pipe = d.create_render_pipeline(
             layout="auto", vertex={"module": module, "entry_point": "vs_main", "buffers": [layout]},
             primitive={"topology": "triangle-list", "cull_mode": "none"},
             depth_stencil={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"},
-            multisample=None, fragment={"module": module, "entry_point": "fs_ortho", "targets": []})
+            multisample=None, fragment={"module": module, "entry_point": "fs_ortho", "targets": [],
+                                        "constants": _constants(source, self.raster_overrides)})
         vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
         binds = [(self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]), r) for b, r in blocks]
 

@@ -57,10 +57,11 @@ def margins(report) -> tuple[float, float]:
     return out[0], out[1]
 
 
-def setup(scene_ref: str, frames: int, overrides=(), dev=None):
-    """The port's raster passes over ``frames`` frames: ``(port, overrides)``, ``SEQUENCE`` added."""
+def setup(scene_ref: str, frames: int, overrides=(), dev=None, raster_variant: str = "faithful"):
+    """The port's raster passes over ``frames`` frames (``raster_variant``'s raster switches):
+    ``(port, overrides)``, ``SEQUENCE`` added."""
     overrides = [*SEQUENCE, *overrides]
-    return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev), overrides
+    return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev, raster_variant), overrides
 
 
 def reference(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path) -> list[dict]:
@@ -114,15 +115,16 @@ def timing(scene_ref: str, size: str, grid: str, frames: int, dev=None) -> tuple
 
 
 def sequence_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path, variant: str = "faithful",
-                     cache: dict | None = None):
+                     cache: dict | None = None, reports: bool = True):
     """The whole-frame verdict of every frame (``vlref verdict frame_0000/port.toml frame_0001/port.toml ...``,
-    :func:`vlref.oracle.verdict.judge_sequence`): each frame's passes on the port's own buffers against vlref's
-    march carrying its history, and its raster inputs and final frame against vlref's render of that frame
-    carrying its own; ``cache`` shares vlref's renders and marches between variants."""
+    :func:`vlref.oracle.verdict.judge_sequence`) on the port's buffers exported under ``out_dir``: each frame's
+    passes on the port's own buffers against vlref's march carrying its history, and its raster inputs and
+    final frame against vlref's render of that frame carrying its own; with ``reports``, the verdict's files
+    in ``out_dir/verdict``. ``cache`` shares vlref's renders and marches between variants."""
     from vlref.oracle.verdict import judge_sequence
 
     manifests = fx_port.export(port, out_dir, scene_ref, overrides, port.run(variant))
-    return judge_sequence(manifests, out_dir=out_dir / "verdict", cache=cache)
+    return judge_sequence(manifests, out_dir=out_dir / "verdict" if reports else None, cache=cache)
 
 
 def main(argv=None) -> int:

@@ -120,7 +120,12 @@ def light_blocks(scene, layers) -> np.ndarray:
 
 class Raster(kz_port.KillzonePort):
     """The killzone port's raster passes (depth, spot and cube shadow maps, the cascades of directional lights,
-    scene colour) for a froxel scene: what the froxel port implements is checked instead of the killzone's."""
+    scene colour) for a froxel scene: what the froxel port implements is checked instead of the killzone's, and
+    the raster switches are a froxel variant's (:data:`fx_variants.VARIANTS`, ``raster``)."""
+
+    @staticmethod
+    def raster_switches(variant: str) -> dict:
+        return VARIANTS[variant].raster
 
     @staticmethod
     def _check_scene(scene):
@@ -145,10 +150,10 @@ class FrameSetup:
 
 
 class FroxelPort:
-    """A sequence of frames of one scene on one device: raster passes at construction, froxel passes per
-    variant (:meth:`run`)."""
+    """A sequence of frames of one scene on one device: raster passes at construction (with the raster switches
+    of ``raster_variant``), froxel passes per variant (:meth:`run`)."""
 
-    def __init__(self, scene, frames, dev=None):
+    def __init__(self, scene, frames, dev=None, raster_variant: str = "faithful"):
         import wgpu
         from vlref.scene.animation import scene_at
 
@@ -167,7 +172,10 @@ class FroxelPort:
         self.setups = []
         for f in frames:
             s = scene_at(scene.replace(render=dataclasses.replace(scene.render, frame=int(f))))
-            raster = Raster(s, (self.adapter, self.device))
+            raster = Raster(s, (self.adapter, self.device), raster_variant)
+            if VARIANTS[raster_variant].stale_raster_camera and self.setups:   # the planted bug: G-buffer and
+                raster.globals = raster.globals_buffer(self.setups[0].raster.cam)  # lighting keep frame 0's camera
+                raster.render_scene()
             cam = raster.cam
             far = max(min(s.render.max_distance, cam.far), cam.near * (1.0 + 1e-6))
             self.setups.append(FrameSetup(int(f), s, raster, (cam.near, far)))

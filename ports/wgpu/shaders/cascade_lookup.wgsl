@@ -27,10 +27,20 @@ fn cascade_distance(t: vec2i, layer: i32) -> f32 {
     return select((1.0 - dc) * cascades[2 * layer + 1].y, SKY, dc <= 0.0);
 }
 
-// Visibility of a directional light `li` at x: ONE nearest texel of its cascade (hard filter, as
-// shadow_visibility); strength applied.
-fn cascade_visibility(li: Light, x: vec3f) -> f32 {
-    let m = cascade_lookup(li, x);
+const NORMAL_OFFSET_TEXELS: f32 = 1.5;
+
+// Visibility of a directional light `li` at the surface point x of normal n: ONE nearest texel of its cascade
+// (hard filter, as shadow_visibility); strength applied. The point is looked up offset along its normal by
+// NORMAL_OFFSET_TEXELS texels of the cascade that holds it, times 1 - n.l (normal-offset shadows, Holbert
+// 2011): under a low sun one texel of a receiver's own map spans more depth than the caster-side bias, so a
+// point looked up on its surface would shadow itself (acne); vlref shades surfaces with exact shadow rays.
+fn cascade_visibility(li: Light, x: vec3f, n: vec3f) -> f32 {
+    let at = cascade_lookup(li, x);
+    if (at.layer < 0) {
+        return 1.0;
+    }
+    let texel = 2.0 * cascades[2 * at.layer].w / li.shadow.y;
+    let m = cascade_lookup(li, x + n * (NORMAL_OFFSET_TEXELS * texel * (1.0 - max(-dot(n, li.dir_range.xyz), 0.0))));
     if (m.layer < 0) {
         return 1.0;
     }

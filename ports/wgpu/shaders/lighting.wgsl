@@ -30,7 +30,7 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
         if (cos_n > 0.0) {
             var v: f32;
             if (li.pos_kind.w == 2.0) {
-                v = cascade_visibility(li, x);
+                v = cascade_visibility(li, x, n);
             } else {
                 v = shadow_visibility(li, x);
             }
