@@ -206,9 +206,10 @@ def test_raster_bug_passes_its_own_buffers_and_fails_against_the_scene_by_frame_
     """A raster bug feeds vlref's march the same wrong inputs, so on the port's own buffers it passes every frame;
     only the sequence verdict against the scene catches it, naming the frames (1-3: the camera has moved since
     frame 0) and the passes (depth, scene colour) where it fails by at least 2x a bound."""
-    _, folder, cache, _ = verdicts["anim_sun"]
-    port, overrides = fx_check.setup("anim_sun", FRAMES, VERDICT_SCENES["anim_sun"], device, variant)
-    verdict = fx_check.sequence_verdict(port, "anim_sun", overrides, folder / variant, variant, cache, reports=False)
+    scene = VARIANTS[variant].scene or "anim_sun"
+    _, folder, cache, _ = verdicts[scene]
+    port, overrides = fx_check.setup(scene, FRAMES, VERDICT_SCENES[scene], device, variant)
+    verdict = fx_check.sequence_verdict(port, scene, overrides, folder / variant, variant, cache, reports=False)
     assert all(p.passed for f in verdict.frames for p in f.passes if p.group == GROUP_OWN), verdict.table()
     failures = verdict.failures()
     assert failures and all(p.group == GROUP_SCENE for _, p in failures)

@@ -42,7 +42,8 @@ import kz_scene  # noqa: E402
 from kz_variants import VARIANTS  # noqa: E402
 
 SHADERS = HERE / "shaders"
-INCLUDES = {"gbuffer": ("common",), "shadow": (), "lighting": ("common", "lights", "cascade_lookup"),
+INCLUDES = {"gbuffer": ("common",), "shadow": (), "cascade": ("shadow",),
+            "lighting": ("common", "lights", "cascade_lookup"),
             "downsample": ("common",),
             "march": ("common", "lights"), "upsample": ("common",), "blur": ("common",), "composite": ("common",)}
 RENDER_PASSES = ("gbuffer", "shadow", "cascades", "lighting")
@@ -173,8 +174,7 @@ class KillzonePort:
                 problems.append(f"objects.{i}.material.emission")
         for i, li in enumerate(scene.lights):
             if li.type == "directional":
-                problems.append(f"lights.{i}.type (directional: the raster lights surfaces with it, the volume "
-                                "march has no directional light)")
+                problems.append(f"lights.{i}.type (directional)")
             if li.cookie is not None:
                 problems.append(f"lights.{i}.cookie")
             if li.shadows is not None and li.shadows.enabled and scene.techniques.killzone.shadow_filter != "hard":
@@ -294,21 +294,9 @@ class KillzonePort:
                                  self._bind(sp, 0, [self._ubuf(self._buffer(block, wgpu.BufferUsage.UNIFORM))])))
                 self.tiles.append((i, face, view, proj, self.layers[i] + k, sh.resolution))
 
-        def shadows(enc):
-            for layer, res, bind in sp_binds:
-                view = self.shadow.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
-                rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": shadow_clear, "depth_load_op": "clear",
-                    "depth_store_op": "store"})
-                rp.set_pipeline(sp)
-                rp.set_bind_group(0, bind)
-                rp.set_viewport(0, 0, res, res, 0, 1)
-                rp.set_vertex_buffer(0, vbuf)
-                rp.draw(len(tris))
-                rp.end()
-
-        self._timed("shadow", shadows)
-        self.render_cascades(tris, layout)
+        self._timed("shadow", lambda enc: self._depth_layers(enc, self.shadow, sp, sp_binds, shadow_clear, vbuf,
+                                                             len(tris)))
+        self.render_cascades(tris, layout, vbuf)
 
         lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"], ov)
         lp_bind = self._bind(lp, 0, [self._ubuf(self.globals), self._ubuf(self.lights),
@@ -317,7 +305,21 @@ class KillzonePort:
                                      self.cascade_tex.create_view(dimension="2d-array"), self._ubuf(self.cascade_info)])
         self._timed("lighting", lambda enc: self._fullscreen(enc, lp, lp_bind, self.colour.create_view(), (W, H)))
 
-    def render_cascades(self, tris, layout):
+    def _depth_layers(self, enc, texture, pipeline, binds, clear: float, vbuf, count: int):
+        """One depth-only render pass per ``(layer, resolution, bind group)`` of ``binds``: ``count`` vertices of
+        ``vbuf`` into that layer of ``texture`` (cleared to ``clear``), viewport the tile's resolution."""
+        for layer, res, bind in binds:
+            view = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
+            rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
+                "view": view, "depth_clear_value": clear, "depth_load_op": "clear", "depth_store_op": "store"})
+            rp.set_pipeline(pipeline)
+            rp.set_bind_group(0, bind)
+            rp.set_viewport(0, 0, res, res, 0, 1)
+            rp.set_vertex_buffer(0, vbuf)
+            rp.draw(count)
+            rp.end()
+
+    def render_cascades(self, tris, layout, vbuf):
         """Pass 2b, per directional light with shadows: ``shadows.cascades`` orthographic reversed-Z maps
         (cascade.wgsl), one per slice of the view frustum between the split depths of ``shadows.split_lambda``
         up to ``min(shadows.distance, camera.far)``, each covering the slice's bounding sphere in the light's
@@ -355,30 +357,12 @@ class KillzonePort:
                                             usage=self.rt_usage)
         if not blocks:
             return
-        source = (SHADERS / "shadow.wgsl").read_text() + "\n" + (SHADERS / "cascade.wgsl").read_text()
-        module = d.create_shader_module(code=source)
-        pipe = d.create_render_pipeline(
-            layout="auto", vertex={"module": module, "entry_point": "vs_main", "buffers": [layout]},
-            primitive={"topology": "triangle-list", "cull_mode": "none"},
-            depth_stencil={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"},
-            multisample=None, fragment={"module": module, "entry_point": "fs_ortho", "targets": [],
-                                        "constants": _constants(source, self.raster_overrides)})
-        vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
-        binds = [(self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]), r) for b, r in blocks]
-
-        def cascades(enc):
-            for layer, (bind, r) in enumerate(binds):
-                view = self.cascade_tex.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
-                rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": 0.0, "depth_load_op": "clear", "depth_store_op": "store"})
-                rp.set_pipeline(pipe)
-                rp.set_bind_group(0, bind)
-                rp.set_viewport(0, 0, r, r, 0, 1)
-                rp.set_vertex_buffer(0, vbuf)
-                rp.draw(len(tris))
-                rp.end()
-
-        self._timed("cascades", cascades)
+        pipe = self._pipeline("cascade", "vs_main", "fs_ortho", [], self.raster_overrides, vertex_buffers=[layout],
+                              depth={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"})
+        binds = [(layer, r, self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]))
+                 for layer, (b, r) in enumerate(blocks)]
+        self._timed("cascades", lambda enc: self._depth_layers(enc, self.cascade_tex, pipe, binds, 0.0, vbuf,
+                                                               len(tris)))
 
     # ----------------------------------------------------------------------------------- passes 4-9
 

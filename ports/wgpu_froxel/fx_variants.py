@@ -25,6 +25,7 @@ class Variant:
     partial_groups: bool = False                 # host: floor(size / 8) workgroups per axis
     raster: dict = field(default_factory=dict)   # override constants of the raster passes (ports/wgpu/shaders)
     stale_raster_camera: bool = False            # host: G-buffer and lighting keep frame 0's camera (raster)
+    scene: Optional[str] = None                  # the one scene whose motion shows a raster bug (None: every one)
 
     @property
     def is_raster(self) -> bool:
@@ -56,5 +57,5 @@ VARIANTS = {
     # a planted raster bug: own buffers pass (vlref marches on the buggy maps), the scene fails
     "stale_raster_camera": Variant("the G-buffer and lighting passes keep frame 0's camera (their uniform is not "
                                    "updated per frame); shadow maps, froxel passes and manifest have each frame's",
-                                   "fail", stale_raster_camera=True),
+                                   "fail", stale_raster_camera=True, scene="anim_sun"),
 }

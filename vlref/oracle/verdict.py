@@ -699,18 +699,23 @@ def _sequence_html(result: SequenceVerdict) -> str:
         rows.append(f'<tr{style}><td><a href="{folder}/index.html">{i}</a></td><td>{html.escape(v.manifest)}</td>'
                     f"<td>{'PASS' if v.passed else 'FAIL'}</td><td>{len(v.passes) - len(bad)} of {len(v.passes)}</td>"
                     f"<td>{links}</td></tr>")
-    word = "PASS" if result.passed else "FAIL"
-    colour = "#1a7f37" if result.passed else "#cf222e"
+    return _page(result.passed, f"vlref verdict of {len(result.frames)} frames", f"""
+<p>Each frame judged on the port's own buffers and against the scene, temporal state carried on both sides.</p>
+<table><tr><th>frame</th><th>manifest</th><th>result</th><th>comparisons passed</th><th>failing</th></tr>
+{''.join(rows)}</table>
+""")
+
+
+def _page(passed: bool, heading: str, body: str) -> str:
+    """A verdict page: ``heading: PASS`` (green) or ``FAIL`` (red), then ``body`` (HTML)."""
+    word = "PASS" if passed else "FAIL"
+    colour = "#1a7f37" if passed else "#cf222e"
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>vlref verdict: {word}</title>
 <style>body {{ font-family: system-ui, sans-serif; margin: 1.5em; }} h1 span {{ color: {colour}; }}
 table {{ border-collapse: collapse; font-size: 0.9em; }} td, th {{ border: 1px solid #d0d7de; padding: 2px 8px; }}
-</style></head><body>
-<h1>vlref verdict of {len(result.frames)} frames: <span>{word}</span></h1>
-<p>Each frame judged on the port's own buffers and against the scene, temporal state carried on both sides.</p>
-<table><tr><th>frame</th><th>manifest</th><th>result</th><th>comparisons passed</th><th>failing</th></tr>
-{''.join(rows)}</table>
-</body></html>
+img {{ image-rendering: pixelated; }}</style></head><body>
+<h1>{heading}: <span>{word}</span></h1>{body}</body></html>
 """
 
 
@@ -732,18 +737,10 @@ def _index_html(verdict: Verdict) -> str:
             figures.append(f'<figure><figcaption>{html.escape(p.name)} ({html.escape(p.group)}): |port - vlref|'
                            f'</figcaption><a href="{rel}"><img src="{_slug(p.group)}/{_slug(p.name)}/heatmap.png" '
                            f'width="480"></a></figure>')
-    word = "PASS" if verdict.passed else "FAIL"
-    colour = "#1a7f37" if verdict.passed else "#cf222e"
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>vlref verdict: {word}</title>
-<style>body {{ font-family: system-ui, sans-serif; margin: 1.5em; }} h1 span {{ color: {colour}; }}
-table {{ border-collapse: collapse; font-size: 0.9em; }} td, th {{ border: 1px solid #d0d7de; padding: 2px 8px; }}
-img {{ image-rendering: pixelated; }}</style></head><body>
-<h1>vlref verdict: <span>{word}</span></h1>
+    return _page(verdict.passed, "vlref verdict", f"""
 <p>{html.escape(verdict.manifest)}: a port passes when every comparison passes, on its own buffers and against
 the scene.</p>
 <table><tr><th>pass</th><th>group</th><th>preset</th><th>result</th><th>failing pixels</th><th>margins</th>
 <th>reason</th></tr>{''.join(rows)}</table>
 {''.join(figures)}
-</body></html>
-"""
+""")
