@@ -1,4 +1,6 @@
-"""The whole-frame verdict on a GPU port: ``vlref verdict PORT.toml -o DIR`` (:func:`judge`).
+"""The whole-frame verdict on a GPU port: ``vlref verdict PORT.toml -o DIR`` (:func:`judge`), and on every
+frame of a sequence, temporal history carried on both sides: ``vlref verdict A.toml B.toml ... -o DIR``
+(:func:`judge_sequence`).
 
 A port passes only when two judgments pass:
 
@@ -537,10 +539,13 @@ def _check_presets(port, preset: str | None) -> None:
 def _judge_frame(manifest, port, preset: str | None, out_dir, cache: dict, previous):
     """``(verdict, comparisons, state)`` of one frame; ``previous`` is the state of the frame before it (None:
     no history): the cache keys of vlref's render of the scene and of its march on the port's buffers, under
-    which their histories are kept, so that each key names the frame's content and all the frames before it."""
+    which their histories are kept, so that each key names the frame's content and all the frames before it
+    that left a history (a frame after one without history, e.g. of a technique without temporal state, is
+    keyed by its content alone and shares the cache with a first frame)."""
     own_preset = port.preset or preset or DEFAULT_PRESET
     technique = TECHNIQUES[port.scene.render.technique]
-    scene_before, port_before = previous if previous is not None else (None, None)
+    scene_before, port_before = (key if key is not None and cache[key][3] is not None else None
+                                 for key in (previous if previous is not None else (None, None)))
 
     scene = port.scene if port.has_shadows else _scene_without_shadows(port.scene)
     scene_key = ("scene", scene_hash(scene), scene_before)
