@@ -85,8 +85,9 @@ def test_sequence_verdict_names_the_frame_and_pass_of_each_failure(exported, tmp
     assert [(i, p.name, p.group) for i, p in seq.failures()] == [(1, "inscatter", GROUP_OWN)]
     assert not seq.passed and seq.frames[0].passed and "- frame 1, inscatter (own buffers)" in seq.table()
 
-    out = tmp_path / "verdict"
-    assert main(["verdict", str(raw / "port.toml"), str(second / "port.toml"), "-o", str(out), "-q"]) == 1
+    out, xml = tmp_path / "verdict", tmp_path / "verdict.xml"
+    assert main(["verdict", str(raw / "port.toml"), str(second / "port.toml"), "-o", str(out), "-q",
+                 "--junit", str(xml)]) == 1
     data = json.loads((out / "verdict.json").read_text())
     assert data["passed"] is False and [(f["frame"], f["name"]) for f in data["failures"]] == [(1, "inscatter")]
     assert [f["passed"] for f in data["frames"]] == [True, False]
@@ -95,6 +96,9 @@ def test_sequence_verdict_names_the_frame_and_pass_of_each_failure(exported, tmp
             data["frames"][i]["passes"]
     assert (out / "frame_0001" / "own_buffers" / "inscatter" / "report.html").is_file()
     assert 'href="frame_0001/own_buffers/inscatter/report.html"' in (out / "index.html").read_text()
+    cases = dict(re.findall(r'<testcase [^>]*name="([^"]+)"[^>]*>(\s*<failure)?', xml.read_text()))
+    assert len(cases) == sum(len(f["passes"]) for f in data["frames"])
+    assert [name for name, failed in cases.items() if failed] == ["frame 1: own buffers: inscatter"]
     with pytest.raises(InputError):
         judge_sequence([])
 
