@@ -22,7 +22,7 @@ from vlref.io.images import read_image
 from vlref.oracle.compare import compare_arrays, margin
 from vlref.oracle.edges import block_any, depth_discontinuities, dilate, edge_zone
 from vlref.oracle.presets import load_presets, tolerance
-from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge
+from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge, judge_sequence
 from vlref.port import load_port
 from vlref.port.export import export_port
 from vlref.render import prepare_frame
@@ -69,6 +69,39 @@ def test_vlref_as_its_own_port_passes_both_judgments(exported, tmp_path):
             assert p["metrics"]["failing_pixels"] == 0 and p["metrics"]["compared_pixels"] > 0
             assert (out / p["report"].split(str(out) + "/")[1]).is_file()
     assert "PASS" in (out / "index.html").read_text()
+
+
+def test_sequence_verdict_names_the_frame_and_pass_of_each_failure(exported, tmp_path):
+    """`vlref verdict A.toml B.toml -o DIR`: every frame judged as `vlref verdict` judges it alone (pillars'
+    killzone keeps no history), its files under DIR/frame_NNNN, and the sequence's verdict.json naming each
+    failure by frame and pass: here the second frame's inscatter pass scaled by 1.5."""
+    raw, _ = exported
+    second = _copy(raw, tmp_path / "second")
+    np.save(second / "port_inscatter.npy", np.load(second / "port_inscatter.npy") * 1.5)
+    cache = {}
+    alone = judge(raw / "port.toml", cache=cache)
+    seq = judge_sequence([raw / "port.toml", second / "port.toml"], cache=cache)
+    assert [(p.name, p.passed, p.metrics) for p in seq.frames[0].passes] == \
+        [(p.name, p.passed, p.metrics) for p in alone.passes]
+    assert [(i, p.name, p.group) for i, p in seq.failures()] == [(1, "inscatter", GROUP_OWN)]
+    assert not seq.passed and seq.frames[0].passed and "- frame 1, inscatter (own buffers)" in seq.table()
+
+    out, xml = tmp_path / "verdict", tmp_path / "verdict.xml"
+    assert main(["verdict", str(raw / "port.toml"), str(second / "port.toml"), "-o", str(out), "-q",
+                 "--junit", str(xml)]) == 1
+    data = json.loads((out / "verdict.json").read_text())
+    assert data["passed"] is False and [(f["frame"], f["name"]) for f in data["failures"]] == [(1, "inscatter")]
+    assert [f["passed"] for f in data["frames"]] == [True, False]
+    for i in (0, 1):
+        assert json.loads((out / f"frame_{i:04d}" / "verdict.json").read_text())["passes"] == \
+            data["frames"][i]["passes"]
+    assert (out / "frame_0001" / "own_buffers" / "inscatter" / "report.html").is_file()
+    assert 'href="frame_0001/own_buffers/inscatter/report.html"' in (out / "index.html").read_text()
+    cases = dict(re.findall(r'<testcase [^>]*name="([^"]+)"[^>]*>(\s*<failure)?', xml.read_text()))
+    assert len(cases) == sum(len(f["passes"]) for f in data["frames"])
+    assert [name for name, failed in cases.items() if failed] == ["frame 1: own buffers: inscatter"]
+    with pytest.raises(InputError):
+        judge_sequence([])
 
 
 def _edit_exr(path, change):

@@ -7,6 +7,7 @@ Passes (each a real render pass writing an engine's texture formats):
 ====  ==========  =========================================================  ==========================
  1    gbuffer     scene triangles, reversed-Z depth test (greater)           depth32float, 2x rgba16float
  2    shadow      one pass per spot map / cube face, caster-side bias        depth32float 2D-array layer
+ 2b   cascades    per directional light: one orthographic map per cascade     depth32float 2D-array layer
  3    lighting    deferred scene colour (hard shadow-map lookups)            rgba16float
  4    downsample  min linear eye depth per march texel                       r32float (march size)
  5    volumes     per light: volume mesh (back faces), march, additive blend rgba16float (march size)
@@ -41,9 +42,11 @@ import kz_scene  # noqa: E402
 from kz_variants import VARIANTS  # noqa: E402
 
 SHADERS = HERE / "shaders"
-INCLUDES = {"gbuffer": ("common",), "shadow": (), "lighting": ("common", "lights"), "downsample": ("common",),
+INCLUDES = {"gbuffer": ("common",), "shadow": (), "cascade": ("shadow",),
+            "lighting": ("common", "lights", "cascade_lookup"),
+            "downsample": ("common",),
             "march": ("common", "lights"), "upsample": ("common",), "blur": ("common",), "composite": ("common",)}
-RENDER_PASSES = ("gbuffer", "shadow", "lighting")
+RENDER_PASSES = ("gbuffer", "shadow", "cascades", "lighting")
 POST_PASSES = ("downsample", "volumes", "upsample", "blur_h", "blur_v", "composite")
 RES_FACTOR = {"full": 1, "half": 2, "quarter": 4}
 PASSES = (("depth_lo", "depth_half", "float32"), ("march", "march_half", None), ("upsample", "upsample", None),
@@ -114,8 +117,7 @@ class KillzonePort:
         self.adapter, self.device = dev if dev is not None else device()
         self.scene = scene
         self._check_scene(scene)
-        spec = VARIANTS[raster_variant]
-        self.raster_overrides = spec.overrides if spec.raster else {}
+        self.raster_overrides = self.raster_switches(raster_variant)
         self.cam = kz_scene.camera_setup(scene)
         W, H = self.cam.width, self.cam.height
         f = RES_FACTOR[kz_scene.resolved(scene, "resolution")]
@@ -124,16 +126,20 @@ class KillzonePort:
         self.timings: dict[str, float] = {}
         d = self.device
         self._fence = d.create_buffer(size=4, usage=wgpu.BufferUsage.COPY_SRC | wgpu.BufferUsage.COPY_DST)
-        self.globals = self._buffer(kz_scene.globals_block(scene, self.cam, self.low, p.upsample_epsilon,
-                                                           p.blur_sigma), wgpu.BufferUsage.UNIFORM)
-        self.layers, layer = [], 0
+        self.globals = self.globals_buffer(self.cam)
+        self.layers, layer, cascade = [], 0, 0   # per light: first layer of `shadow` (first cascade: directional)
         for light in scene.lights:
             shadowed = light.shadows is not None and light.shadows.enabled
-            self.layers.append(layer if shadowed else -1)
-            layer += {"spot": 1, "point": 6}[light.type] if shadowed else 0
+            if light.type == "directional":
+                self.layers.append(cascade if shadowed else -1)
+                cascade += light.shadows.cascades if shadowed else 0
+            else:
+                self.layers.append(layer if shadowed else -1)
+                layer += {"spot": 1, "point": 6}[light.type] if shadowed else 0
         self.light_blocks = np.concatenate([kz_scene.light_block(li, la) for li, la in zip(scene.lights, self.layers)])
         self.lights = self._buffer(self.light_blocks, wgpu.BufferUsage.STORAGE)
-        self.shadow_res = max([li.shadows.resolution for li, la in zip(scene.lights, self.layers) if la >= 0] + [1])
+        self.shadow_res = max([li.shadows.resolution for li, la in zip(scene.lights, self.layers)
+                               if la >= 0 and li.type != "directional"] + [1])
         usage = wgpu.TextureUsage
         rt = usage.RENDER_ATTACHMENT | usage.TEXTURE_BINDING | usage.COPY_SRC
         self.depth = d.create_texture(size=(W, H, 1), format="depth32float", usage=rt)
@@ -146,9 +152,18 @@ class KillzonePort:
         self.render_scene()
 
     @staticmethod
+    def raster_switches(variant: str) -> dict:
+        """The WGSL override constants of passes 1-3 under ``variant`` (:mod:`kz_variants`): a raster variant's
+        switches, none for the others."""
+        spec = VARIANTS[variant]
+        return spec.overrides if spec.raster else {}
+
+    @staticmethod
     def _check_scene(scene):
         """What this port implements: killzone, point/spot lights without cookies (every attenuation and cone
-        law, shadow strength, slope bias), a homogeneous medium; raises ValueError listing what it does not."""
+        law, shadow strength, slope bias), a homogeneous medium; raises ValueError listing what it does not.
+        (The raster passes also light surfaces with directional lights and their cascades, for the froxel
+        port, ports/wgpu_froxel; the volume march has none.)"""
         m = scene.medium
         problems = [k for k, bad in (("medium.height_fog", m.height_fog), ("medium.noise", m.noise),
                                      ("medium.bounds", m.bounds)) if bad is not None]
@@ -180,6 +195,12 @@ class KillzonePort:
             raise ValueError("the wgpu port does not implement: " + ", ".join(problems))
 
     # ----------------------------------------------------------------------------------- helpers
+
+    def globals_buffer(self, cam: kz_scene.CameraSetup):
+        """The ``Globals`` uniform (common.wgsl) of the scene seen by ``cam``."""
+        p = self.scene.techniques.killzone
+        return self._buffer(kz_scene.globals_block(self.scene, cam, self.low, p.upsample_epsilon, p.blur_sigma),
+                            self.wgpu.BufferUsage.UNIFORM)
 
     def _buffer(self, array: np.ndarray, usage):
         data = np.ascontiguousarray(array, dtype=np.float32)
@@ -263,7 +284,7 @@ class KillzonePort:
         shadow_clear = 1.0 if ov.get("HOST_SHADOW_CLEAR_NEAR") else 0.0
         sp_binds, self.tiles = [], []
         for i, light in enumerate(self.scene.lights):
-            if self.layers[i] < 0:
+            if self.layers[i] < 0 or light.type == "directional":   # directional: render_cascades
                 continue
             for k, (face, view, proj) in enumerate(kz_scene.shadow_tiles(light)):
                 sh = light.shadows
@@ -273,26 +294,75 @@ class KillzonePort:
                                  self._bind(sp, 0, [self._ubuf(self._buffer(block, wgpu.BufferUsage.UNIFORM))])))
                 self.tiles.append((i, face, view, proj, self.layers[i] + k, sh.resolution))
 
-        def shadows(enc):
-            for layer, res, bind in sp_binds:
-                view = self.shadow.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
-                rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": shadow_clear, "depth_load_op": "clear",
-                    "depth_store_op": "store"})
-                rp.set_pipeline(sp)
-                rp.set_bind_group(0, bind)
-                rp.set_viewport(0, 0, res, res, 0, 1)
-                rp.set_vertex_buffer(0, vbuf)
-                rp.draw(len(tris))
-                rp.end()
-
-        self._timed("shadow", shadows)
+        self._timed("shadow", lambda enc: self._depth_layers(enc, self.shadow, sp, sp_binds, shadow_clear, vbuf,
+                                                             len(tris)))
+        self.render_cascades(tris, layout, vbuf)
 
         lp = self._pipeline("lighting", "vs_fullscreen", "fs_main", ["rgba16float"], ov)
         lp_bind = self._bind(lp, 0, [self._ubuf(self.globals), self._ubuf(self.lights),
                                      self.shadow.create_view(dimension="2d-array"), self.depth.create_view(),
-                                     self.normal.create_view(), self.albedo.create_view()])
+                                     self.normal.create_view(), self.albedo.create_view(),
+                                     self.cascade_tex.create_view(dimension="2d-array"), self._ubuf(self.cascade_info)])
         self._timed("lighting", lambda enc: self._fullscreen(enc, lp, lp_bind, self.colour.create_view(), (W, H)))
+
+    def _depth_layers(self, enc, texture, pipeline, binds, clear: float, vbuf, count: int):
+        """One depth-only render pass per ``(layer, resolution, bind group)`` of ``binds``: ``count`` vertices of
+        ``vbuf`` into that layer of ``texture`` (cleared to ``clear``), viewport the tile's resolution."""
+        for layer, res, bind in binds:
+            view = texture.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
+            rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
+                "view": view, "depth_clear_value": clear, "depth_load_op": "clear", "depth_store_op": "store"})
+            rp.set_pipeline(pipeline)
+            rp.set_bind_group(0, bind)
+            rp.set_viewport(0, 0, res, res, 0, 1)
+            rp.set_vertex_buffer(0, vbuf)
+            rp.draw(count)
+            rp.end()
+
+    def render_cascades(self, tris, layout, vbuf):
+        """Pass 2b, per directional light with shadows: ``shadows.cascades`` orthographic reversed-Z maps
+        (cascade.wgsl), one per slice of the view frustum between the split depths of ``shadows.split_lambda``
+        up to ``min(shadows.distance, camera.far)``, each covering the slice's bounding sphere in the light's
+        frame (``look_frame(direction)``), its view plane ``back`` before the centre so that every caster lies
+        in front. Fills ``cascade_tex`` (depth32float array), ``cascade_info`` (per cascade: centre, radius;
+        back, far: cascade_lookup.wgsl), ``cascade_splits`` (per light) and ``cascade_tiles`` (light, view,
+        projection, layer, res)."""
+        wgpu, cam, d = self.wgpu, self.cam, self.device
+        verts = tris[:, :3].astype(np.float64)
+        self.cascade_tiles, self.cascade_splits, info, blocks = [], {}, [], []
+        res = 1
+        for i, light in enumerate(self.scene.lights):
+            if light.type != "directional" or self.layers[i] < 0:
+                continue
+            sh = light.shadows
+            res = max(res, sh.resolution)
+            frame = kz_scene.look_frame(light.direction)
+            fwd = frame[:, 2]
+            far_c = min(sh.distance, cam.far)
+            splits = kz_scene.cascade_splits(cam.near, max(far_c, cam.near * (1.0 + 1e-6)), sh.cascades,
+                                             sh.split_lambda)
+            self.cascade_splits[i] = splits
+            for k in range(sh.cascades):
+                centre, radius = kz_scene.frustum_sphere(cam, splits[k], splits[k + 1])
+                back = radius + max(0.0, float(((centre - verts) @ fwd).max())) + 1.0
+                far = back + radius
+                view = kz_scene.view_matrix(centre - back * fwd, frame)
+                proj = kz_scene.orthographic_reversed(radius, far)
+                info.append([*centre, radius, back, far, 0.0, 0.0])
+                blocks.append((np.concatenate([(proj @ view).T.reshape(-1), view.T.reshape(-1),
+                                               [0.0, far, sh.bias, sh.slope_bias]]), sh.resolution))
+                self.cascade_tiles.append((i, view, proj, len(self.cascade_tiles), sh.resolution))
+        self.cascade_info = self._buffer(np.asarray(info or [[0.0] * 8]), wgpu.BufferUsage.STORAGE)
+        self.cascade_tex = d.create_texture(size=(res, res, max(len(blocks), 1)), format="depth32float",
+                                            usage=self.rt_usage)
+        if not blocks:
+            return
+        pipe = self._pipeline("cascade", "vs_main", "fs_ortho", [], self.raster_overrides, vertex_buffers=[layout],
+                              depth={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"})
+        binds = [(layer, r, self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]))
+                 for layer, (b, r) in enumerate(blocks)]
+        self._timed("cascades", lambda enc: self._depth_layers(enc, self.cascade_tex, pipe, binds, 0.0, vbuf,
+                                                               len(tris)))
 
     # ----------------------------------------------------------------------------------- passes 4-9
 
@@ -386,10 +456,13 @@ class KillzonePort:
         return a.reshape(h, w, -1) if bpp > 4 else a.reshape(h, w)
 
     def raster_buffers(self) -> dict:
-        """Passes 1-3 read back: reversed-Z depth, colour (h, w, 3) and the shadow tiles."""
+        """Passes 1-3 read back: reversed-Z depth, colour (h, w, 3) and the shadow tiles (each cascade a tile
+        of its light, without a face name)."""
         return {"depth": self.read(self.depth), "colour": self.read(self.colour)[..., :3],
                 "tiles": [(i, face, view, proj, self.read(self.shadow, layer)[:res, :res])
-                          for i, face, view, proj, layer, res in self.tiles]}
+                          for i, face, view, proj, layer, res in self.tiles]
+                + [(i, "", view, proj, self.read(self.cascade_tex, layer)[:res, :res])
+                   for i, view, proj, layer, res in self.cascade_tiles]}
 
 
 # --------------------------------------------------------------------------- export (docs/PORTING.md)
@@ -428,7 +501,10 @@ def export(port: KillzonePort, out_dir, scene_ref: str, overrides=(), passes: di
     for i, tiles in by_light.items():
         np.save(out / f"shadow_{i}.npy", np.concatenate([t[3] for t in tiles], axis=1))  # tiles side by side
         lines += ["[[shadow_maps]]", f"light = {i}", f'path = "shadow_{i}.npy"', f"atlas = [{len(tiles)}, 1]",
-                  'encoding = "depth"', 'convention = "reversed"', 'uv_origin = "top"', ""]
+                  'encoding = "depth"', 'convention = "reversed"', 'uv_origin = "top"']
+        if i in port.cascade_splits:   # cascades: their split depths (PORTING §2)
+            lines.append(f"splits = {_toml(port.cascade_splits[i])}")
+        lines.append("")
         for face, view, proj, _ in tiles:
             lines += ["[[shadow_maps.tiles]]"] + ([f'face = "{face}"'] if face else [])
             lines += [f"view = {_toml(view)}", f"projection = {_toml(proj)}", ""]

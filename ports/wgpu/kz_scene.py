@@ -21,7 +21,7 @@ SKY_DEPTH = 3.0e38
 """Linear depth the shaders store for sky (a finite stand-in for ``inf``: ``|Δz|`` to it is ~3e38, so a
 depth weight ``1/(|Δz| + ε)`` is ~0, and sky-to-sky differences are exactly 0)."""
 
-KIND_POINT, KIND_SPOT = 0, 1
+KIND_POINT, KIND_SPOT, KIND_DIRECTIONAL = 0, 1, 2
 ATT_CODES = {"inverse_square": 0, "unity": 1, "windowed": 2}
 CONE_CODES = {"unity": 0, "linear": 1, "smoothstep": 2}
 
@@ -125,6 +125,32 @@ def shadow_tiles(light):
                  reversed_perspective(light.spot_angle, 1.0, sh.near, light.range))]
     return [(name, view_matrix(pos, np.array([r, u, f], dtype=np.float64).T),
              reversed_perspective(90.0, 1.0, sh.near, light.range)) for name, r, u, f in CUBE_FACES]
+
+
+# --------------------------------------------------------------------------- cascades of directional lights
+
+def cascade_splits(near: float, far: float, count: int, lam: float) -> np.ndarray:
+    """Cascade split depths: the practical split scheme ``λ n (f/n)^{i/N} + (1 − λ)(n + (f − n) i/N)``."""
+    i = np.arange(count + 1) / count
+    return lam * near * (far / near) ** i + (1.0 - lam) * (near + (far - near) * i)
+
+
+def frustum_sphere(cam: CameraSetup, z0: float, z1: float) -> tuple[np.ndarray, float]:
+    """Bounding sphere of the view-frustum slice between eye depths z0 and z1: its 8 corners' mean, and
+    their largest distance from it (the region a cascade covers)."""
+    t = math.tan(math.radians(cam.fov) / 2.0)
+    aspect = cam.width / cam.height
+    corners = np.array([cam.eye + cam.frame @ [sx * z * t * aspect, sy * z * t, z]
+                        for z in (z0, z1) for sx in (-1, 1) for sy in (-1, 1)])
+    centre = corners.mean(axis=0)
+    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
+
+
+def orthographic_reversed(half: float, far: float) -> np.ndarray:
+    """View -> clip of a square orthographic tile of half-size ``half``, depth ``1 − z/far`` (reversed-Z, near 0)."""
+    p = np.diag([1.0 / half, 1.0 / half, -1.0 / far, 1.0])
+    p[2, 3] = 1.0
+    return p
 
 
 # --------------------------------------------------------------------------- tessellation
@@ -267,7 +293,17 @@ def _inner_full_angle(light) -> float:
 
 
 def light_block(light, layer: int) -> np.ndarray:
-    """One ``Light`` struct of the shaders (common.wgsl): 8 vec4 = 32 float32."""
+    """One ``Light`` struct of the shaders (lights.wgsl): 8 vec4 = 32 float32. ``layer``: the light's first
+    layer in the shadow texture (spot, point) or its first cascade (directional), -1 without shadows."""
+    colour = np.asarray(light.color, dtype=np.float64) * light.intensity
+    sh = light.shadows
+    if light.type == "directional":   # unit direction of travel, its frame, cone.x = the number of cascades
+        sh = sh if layer >= 0 else None
+        frame = look_frame(light.direction)
+        rows = [[0.0, 0.0, 0.0, KIND_DIRECTIONAL], [*frame[:, 2], 0.0], [*colour, sh.strength if sh else 0.0],
+                [*frame[:, 0], 0.0], [*frame[:, 1], sh.bias if sh else 0.0], [sh.cascades if sh else 0, 0, 0, 0],
+                [0, 0, 0, 0], [layer if sh else -1, sh.resolution if sh else 0, 0.0, sh.slope_bias if sh else 0.0]]
+        return np.array(rows, dtype=np.float32).reshape(-1)
     kind = KIND_SPOT if light.type == "spot" else KIND_POINT
     pos = np.asarray(light.position, dtype=np.float64)
     frame = light_frame(light) if light.type == "spot" else np.eye(3)
@@ -275,8 +311,6 @@ def light_block(light, layer: int) -> np.ndarray:
     half_i = math.radians(_inner_full_angle(light)) / 2.0 if light.type == "spot" else 0.0
     cos_o, cos_i = math.cos(half_o), math.cos(half_i)
     unity_a = 1.0 / max(0.001, cos_i - cos_o)
-    sh = light.shadows
-    colour = np.asarray(light.color, dtype=np.float64) * light.intensity
     rows = [[*pos, kind], [*frame[:, 2], light.range], [*colour, sh.strength if sh else 0.0],
             [*frame[:, 0], math.tan(half_o)], [*frame[:, 1], sh.bias if sh else 0.0],
             [cos_o, cos_i, half_o, half_i], [ATT_CODES[light.attenuation], CONE_CODES[light.cone], unity_a, -cos_o * unity_a],

@@ -2,6 +2,7 @@
 
     python ports/wgpu_froxel/fx_check.py [--scene anim_spot] [--frames 4] [--size 96x54] [--grid 20x12x16]
                                          [--set K=V ...] [-o DIR] [--timing-size 1920x1080]
+                                         [--verdict | --verdict-only]
 
 Steps (docs/PORTING.md §5, in-process): the port renders frames 0 .. N-1 and exports each frame's raster
 buffers and manifest (:func:`fx_port.export`); ``vlref march`` runs the froxel technique on them frame by
@@ -9,11 +10,15 @@ frame, carrying vlref's own history (:func:`vlref.port.march_sequence`, the CLI'
 frame_0000/port.toml frame_0001/port.toml ... --stages``); each exported pass of each frame is compared
 with vlref's buffer of that name under its preset (:data:`PASSES`); then every variant (:mod:`fx_variants`)
 re-runs the froxel passes of the whole sequence on the same raster buffers and is judged the same way.
+With ``--verdict``, the whole-frame sequence verdict too (``vlref verdict frame_0000/port.toml ...``,
+:func:`sequence_verdict`): every frame on the port's own buffers and against the scene, history carried on
+both sides, for the faithful port and each raster variant (whose bug only the scene side can see).
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import tempfile
 import time
@@ -28,19 +33,10 @@ import fx_port  # noqa: E402
 import kz_scene  # noqa: E402
 from fx_variants import VARIANTS  # noqa: E402
 
-PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-sampled"),
-          ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
-          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-sampled"), ("transmittance", "gpu-sampled"),
-          ("final", "gpu-sampled"))
-"""(buffer, preset). The slice boundaries are float32 host values: ``float32``. The grids are rgba16float,
-one fp16 rounding per store: ``gpu-full``, but for what the port reads through the hardware trilinear
-sampler, whose sub-texel weights are 8-bit fractions on real GPUs (up to 1/512 of the difference between
-neighbouring texels, which across a shadow shaft or along depth can be as large as the value itself):
-the history (fetched at the reprojected position) and the apply outputs take ``gpu-sampled``: ``gpu-half``
-per texel (it states that it absorbs 8-bit filtering weights) plus a bounded share of texels, since vlref builds
-no geometric zone for 3-D grids. Measured on an H100 (README): with a moving camera and sharp
-shafts the history fails ``gpu-full`` (35 of 3840 froxels, 1.8x) and the apply outputs do (1.4x); the frame
-counts, fetched the same way but nearly constant, stay within ``gpu-full``."""
+from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge_sequence  # noqa: E402
+
+PASSES = fx_port.PASSES
+"""(buffer, preset) of every exported pass (:data:`fx_port.PASSES`, which says why each preset)."""
 
 APPLY_BUFFERS = ("inscatter", "transmittance", "final")
 """The apply pass's outputs: the only ones read through the hardware trilinear sampler of the integrated grid."""
@@ -68,10 +64,11 @@ def margins(report) -> tuple[float, float]:
     return out[0], out[1]
 
 
-def setup(scene_ref: str, frames: int, overrides=(), dev=None):
-    """The port's raster passes over ``frames`` frames: ``(port, overrides)``, ``SEQUENCE`` added."""
+def setup(scene_ref: str, frames: int, overrides=(), dev=None, raster_variant: str = "faithful"):
+    """The port's raster passes over ``frames`` frames (``raster_variant``'s raster switches):
+    ``(port, overrides)``, ``SEQUENCE`` added."""
     overrides = [*SEQUENCE, *overrides]
-    return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev), overrides
+    return fx_port.FroxelPort(kz_scene.load(scene_ref, overrides), range(frames), dev, raster_variant), overrides
 
 
 def reference(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path) -> list[dict]:
@@ -124,27 +121,51 @@ def timing(scene_ref: str, size: str, grid: str, frames: int, dev=None) -> tuple
     return kind, mean[0], mean[1]
 
 
-def verdict_manifest(manifest: Path) -> Path:
-    """Add to an exported frame's manifest what ``vlref verdict`` reads (branch i24-verdict, NOTES.md): the
-    port's ``final`` and a ``[[passes]]`` entry per :data:`PASSES` buffer but ``froxel_history_valid`` (all
-    zero on a first frame, which the verdict refuses as proving nothing)."""
-    top = 'colour = "colour.npy"\n'
-    text = manifest.read_text().replace(top, top + 'final = "port_final.npy"\n', 1)
-    for name, preset in PASSES:
-        if name != "froxel_history_valid":
-            text += f'\n[[passes]]\nname = "{name}"\nbuffer = "{name}"\npath = "port_{name}.npy"\npreset = "{preset}"\n'
-    manifest.write_text(text)
-    return manifest
+def sequence_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path, variant: str = "faithful",
+                     cache: dict | None = None, reports: bool = True):
+    """The whole-frame verdict of every frame (``vlref verdict frame_0000/port.toml frame_0001/port.toml ...``,
+    :func:`vlref.oracle.verdict.judge_sequence`) on the port's buffers exported under ``out_dir``: each frame's
+    passes on the port's own buffers against vlref's march carrying its history, and its raster inputs and
+    final frame against vlref's render of that frame carrying its own; with ``reports``, the verdict's files
+    in ``out_dir/verdict``. ``cache`` shares vlref's renders and marches between variants."""
+    manifests = fx_port.export(port, out_dir, scene_ref, overrides, port.run(variant))
+    return judge_sequence(manifests, out_dir=out_dir / "verdict" if reports else None, cache=cache)
 
 
-def scene_verdict(port: fx_port.FroxelPort, scene_ref: str, overrides, out_dir: Path):
-    """The whole-frame verdict (``vlref.oracle.verdict.judge``: own buffers and against the scene) of the
-    faithful port's first frame. The verdict marches one manifest without history, so of a temporal sequence
-    only the first frame, which has none on either side, is comparable."""
-    from vlref.oracle.verdict import judge   # branch i24-verdict; absent before it is merged
+def _times(margin: float) -> str:
+    return "inf" if math.isinf(margin) else f"{margin:.3g}x"
 
-    first = fx_port.export(port, out_dir, scene_ref, overrides, port.run("faithful"))[0]
-    return judge(verdict_manifest(first), out_dir=out_dir / "verdict")
+
+def print_sequence_verdicts(scene: str, frames: int, overrides, dev, out: Path) -> bool:
+    """Print the sequence verdict of the faithful port of ``scene`` (reports in ``out/<scene>_verdict``) and a
+    row per raster variant (:attr:`fx_variants.Variant.is_raster`: own buffers and against the scene); whether
+    each is judged as expected."""
+    start = time.perf_counter()
+    port, overrides = setup(scene, frames, overrides, dev)
+    cache: dict = {}
+    v = sequence_verdict(port, scene, overrides, out / f"{scene}_verdict", cache=cache)
+    print(f"\n### `vlref verdict` of {frames} frames of {scene} ({time.perf_counter() - start:.1f} s): "
+          f"{'PASS' if v.passed else 'FAIL'}\n\n{v.table()}")
+    ok = v.passed
+    print("\n| raster variant | expected | own buffers | against the scene | failing (frame: passes, worst margin) |")
+    print("|---|---|---|---|---|")
+    for name, spec in VARIANTS.items():
+        if not spec.is_raster or spec.scene not in (None, scene):
+            continue
+        rport, _ = setup(scene, frames, overrides, dev, name)
+        rv = sequence_verdict(rport, scene, overrides, out / f"{scene}_{name}", name, cache, reports=False)
+        groups = {g: all(p.passed for f in rv.frames for p in f.passes if p.group == g)
+                  for g in (GROUP_OWN, GROUP_SCENE)}
+        by_frame: dict = {}
+        for i, p in rv.failures():
+            by_frame.setdefault(i, []).append((p.name, max(p.metrics.get("margins", {"-": math.inf}).values())))
+        where = "; ".join(f"{i}: {', '.join(n for n, _ in fails)}, {_times(max(m for _, m in fails))}"
+                          for i, fails in by_frame.items()) or "-"
+        good = groups[GROUP_OWN] and not groups[GROUP_SCENE] if spec.expect == "fail" else rv.passed
+        ok &= good
+        print(f"| `{name}`: {spec.description} | {spec.expect} | {'PASS' if groups[GROUP_OWN] else 'FAIL'} | "
+              f"{'PASS' if groups[GROUP_SCENE] else 'FAIL'}{'' if good else ' (WRONG)'} | {where} |")
+    return ok
 
 
 def main(argv=None) -> int:
@@ -158,8 +179,10 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--output", default=None, help="keep the exported buffers here")
     ap.add_argument("--timing-size", default=None, help="also time the passes at WxH (e.g. 1920x1080)")
     ap.add_argument("--timing-grid", default="160x90x64", help="grid of the timing run (default 160x90x64)")
-    ap.add_argument("--verdict", action="store_true", help="also judge each scene's first frame with `vlref "
-                    "verdict` (own buffers and against the scene; needs vlref.oracle.verdict)")
+    ap.add_argument("--verdict", action="store_true", help="also judge every frame of each scene with `vlref "
+                    "verdict` (own buffers and against the scene, history carried on both sides), the faithful "
+                    "port and the raster variants, at the scenes' own shadow-map resolutions")
+    ap.add_argument("--verdict-only", action="store_true", help="only the `--verdict` tables")
     args = ap.parse_args(argv)
     w, h = args.size.lower().split("x")
     gw, gh, d = args.grid.lower().split("x")
@@ -170,7 +193,12 @@ def main(argv=None) -> int:
     print(f"device: {dev[0].info['device']}; {w}x{h}, grid {gw}x{gh}x{d}, {args.frames} frames; buffers in {out}")
     ok = True
     results: dict[str, dict] = {}
-    for scene in args.scene or ["anim_spot", "anim_sun"]:
+    scenes = args.scene or ["anim_spot", "anim_sun"]
+    for scene in scenes:
+        if args.verdict or args.verdict_only:
+            ok &= print_sequence_verdicts(scene, args.frames, base, dev, out)
+        if args.verdict_only:
+            continue
         overrides = [*base, "lights.0.shadows.resolution=128"] if scene == "anim_spot" else base
         start = time.perf_counter()
         port, overrides = setup(scene, args.frames, overrides, dev)
@@ -186,9 +214,6 @@ def main(argv=None) -> int:
             print(f"| {f} | {name} | {preset} | {'PASS' if rep.passed else 'FAIL'} | "
                   f"{int(rep.metrics['failing_pixels'])} of {int(rep.metrics['compared_pixels'])} | {fr:.3f}x | "
                   f"{me:.3f}x |")
-        if args.verdict:
-            v = scene_verdict(port, scene, overrides, out / f"{scene}_verdict")
-            print(f"\n`vlref verdict` of frame 0: {'PASS' if v.passed else 'FAIL'}\n\n{v.table()}")
         for name in ("faithful", "weights8"):
             frames = port.run(name)
             reps = [(f, b, compare(refs[f][b], frames[f][b], "gpu-full")) for f in range(len(refs))
@@ -196,12 +221,16 @@ def main(argv=None) -> int:
             worst = max(((max(margins(r)), f, b) for f, b, r in reps), key=lambda t: t[0])
             print(f"\n`{name}` apply passes under gpu-full: {'PASS' if all(r.passed for *_, r in reps) else 'FAIL'}, "
                   f"worst {worst[0]:.3f}x (frame {worst[1]}, {worst[2]})")
-        for name in VARIANTS:
-            results.setdefault(name, {})[scene] = judge(port.run(name), refs) if name != "faithful" else rows
-    print("\n| variant | expected | verdict | first failing (scene, frame, pass): margin "
-          "| worst margin (scene, frame, pass) |")
-    print("|---|---|---|---|---|")
+        for name, v in VARIANTS.items():
+            if not v.is_raster:
+                results.setdefault(name, {})[scene] = judge(port.run(name), refs) if name != "faithful" else rows
+    if not args.verdict_only:
+        print("\n| variant | expected | verdict | first failing (scene, frame, pass): margin "
+              "| worst margin (scene, frame, pass) |")
+        print("|---|---|---|---|---|")
     for name, v in VARIANTS.items():
+        if args.verdict_only or v.is_raster:
+            continue
         per = results[name]
         passed = all(verdict(rows)[0] for rows in per.values())
         worst = max(((verdict(rows)[1], s, verdict(rows)[2]) for s, rows in per.items()), key=lambda t: t[0])

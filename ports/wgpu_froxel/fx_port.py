@@ -1,9 +1,10 @@
 """The froxel technique (Wronski 2014, Hillaire 2015) as a WebGPU port: WGSL compute shaders driven by wgpu-py.
 
 Written from docs/TECHNIQUES.md (``froxel``), docs/CONVENTIONS.md and docs/PORTING.md §5 as an outside team
-would. The raster passes (reversed-Z depth, spot and cube shadow maps, deferred scene colour) are the killzone
-port's (``ports/wgpu/kz_port.py``, imported as it is), plus the cascaded maps of directional lights
-(:meth:`Raster.render_cascades`); the froxel passes are compute dispatches on 3-D textures:
+would. The raster passes (reversed-Z depth, spot and cube shadow maps, the cascaded maps of directional
+lights, deferred scene colour lit by every light) are the killzone port's (``ports/wgpu/kz_port.py``, imported
+as it is), and so are its light structs and map lookups (``lights.wgsl``, ``cascade_lookup.wgsl``, prepended to
+the injection shader); the froxel passes are compute dispatches on 3-D textures:
 
 ====  ===========  =========================================================  ==========================
  #    pass         what                                                       target
@@ -47,8 +48,20 @@ from fx_variants import VARIANTS  # noqa: E402
 
 SHADERS = HERE / "shaders"
 GROUP = 8
-PASSES = ("inject", "temporal", "integrate", "apply", "tile_depth")
-KIND_DIRECTIONAL = 2.0
+PASSES = (("froxel_slices", "float32"), ("froxel_scatter", "gpu-full"), ("froxel_history", "gpu-sampled"),
+          ("froxel_history_frames", "gpu-full"), ("froxel_history_valid", "gpu-full"),
+          ("froxel_integrated", "gpu-full"), ("inscatter", "gpu-sampled"), ("transmittance", "gpu-sampled"),
+          ("final", "gpu-sampled"))
+"""(buffer, preset): the exported passes, each declared in the manifest's ``[[passes]]`` under vlref's stage
+name. The slice boundaries are float32 host values: ``float32``. The grids are rgba16float, one fp16 rounding
+per store: ``gpu-full``, but for what the port reads through the hardware trilinear sampler, whose sub-texel
+weights are 8-bit fractions on real GPUs (up to 1/512 of the difference between neighbouring texels, which
+across a shadow shaft or along depth can be as large as the value itself): the history (fetched at the
+reprojected position) and the apply outputs take ``gpu-sampled``: ``gpu-half`` per texel (it states that it
+absorbs 8-bit filtering weights) plus a bounded share of texels, since vlref builds no geometric zone for 3-D
+grids. Measured on an H100 (README): with a moving camera and sharp shafts the history fails ``gpu-full``
+(35 of 3840 froxels, 1.8x) and the apply outputs do (1.4x); the frame counts, fetched the same way but nearly
+constant, stay within ``gpu-full``."""
 
 
 def device():
@@ -59,10 +72,11 @@ def device():
 
 
 def shader_source(name: str) -> str:
-    """A pass's WGSL: froxel_common, the killzone port's lights.wgsl for injection, then the pass."""
+    """A pass's WGSL: froxel_common, for injection the killzone port's lights.wgsl and cascade_lookup.wgsl
+    (the light struct, incidence and map lookups both ports share), then the pass."""
     parts = [(SHADERS / "froxel_common.wgsl").read_text()]
     if name == "inject":
-        parts.append((KZ / "shaders" / "lights.wgsl").read_text())
+        parts += [(KZ / "shaders" / f"{inc}.wgsl").read_text() for inc in ("lights", "cascade_lookup")]
     return "\n".join(parts + [(SHADERS / f"{name}.wgsl").read_text()])
 
 
@@ -93,63 +107,25 @@ def jitter(frame: int, mode: str, period: int) -> tuple[float, float, float]:
     return tuple(radical_inverse(frame % period + 1, b) for b in (2, 3, 5))
 
 
-def light_blocks(scene, layers, cascade_first) -> np.ndarray:
-    """The ``Light`` array of lights.wgsl; ``shadow.w`` carries the filter (0 hard, 1 pcf). Directional
-    lights: kind 2, unit direction of travel, ``colour · intensity``, the light frame's right and up, and
-    ``shadow = (first cascade or -1, resolution, -, filter)``, ``cone.x`` = the number of cascades."""
+def light_blocks(scene, layers) -> np.ndarray:
+    """The ``Light`` array of lights.wgsl (:func:`kz_scene.light_block`, ``layers`` the raster's first layer or
+    cascade per light) with ``shadow.w`` carrying the filter (0 hard, 1 pcf)."""
     out = []
-    for light, layer, first in zip(scene.lights, layers, cascade_first):
-        if light.type == "directional":
-            b = np.zeros(32, dtype=np.float32)
-            frame = kz_scene.look_frame(light.direction)
-            b[3], b[4:7] = KIND_DIRECTIONAL, frame[:, 2]
-            b[8:11] = np.asarray(light.color) * light.intensity
-            b[12:15], b[16:19] = frame[:, 0], frame[:, 1]
-            b[28] = first
-            sh = light.shadows
-            if first >= 0:
-                b[11], b[20], b[29] = sh.strength, sh.cascades, sh.resolution
-                b[31] = 1.0 if sh.filter == "pcf" else 0.0
-        else:
-            b = kz_scene.light_block(light, layer)
-            b[31] = 1.0 if light.shadows and light.shadows.filter == "pcf" else 0.0
+    for light, layer in zip(scene.lights, layers):
+        b = kz_scene.light_block(light, layer)
+        b[31] = 1.0 if light.shadows and light.shadows.filter == "pcf" else 0.0
         out.append(b)
     return np.concatenate(out)
 
 
-def cascade_splits(near: float, far: float, count: int, lam: float) -> np.ndarray:
-    """Cascade split depths: the practical split scheme ``λ n (f/n)^{i/N} + (1 − λ)(n + (f − n) i/N)``."""
-    i = np.arange(count + 1) / count
-    return lam * near * (far / near) ** i + (1.0 - lam) * (near + (far - near) * i)
-
-
-def frustum_sphere(cam, z0: float, z1: float) -> tuple[np.ndarray, float]:
-    """Bounding sphere of the view-frustum slice between eye depths z0 and z1: its 8 corners' mean, and
-    their largest distance from it (the region a cascade covers)."""
-    t = math.tan(math.radians(cam.fov) / 2.0)
-    aspect = cam.width / cam.height
-    corners = np.array([cam.eye + cam.frame @ [sx * z * t * aspect, sy * z * t, z]
-                        for z in (z0, z1) for sx in (-1, 1) for sy in (-1, 1)])
-    centre = corners.mean(axis=0)
-    return centre, float(np.linalg.norm(corners - centre, axis=1).max())
-
-
-def orthographic_reversed(half: float, far: float) -> np.ndarray:
-    """View -> clip of a square orthographic tile of half-size ``half``, depth ``1 − z/far`` (reversed-Z, near 0)."""
-    p = np.diag([1.0 / half, 1.0 / half, -1.0 / far, 1.0])
-    p[2, 3] = 1.0
-    return p
-
-
 class Raster(kz_port.KillzonePort):
-    """The killzone port's raster passes (depth, spot and cube shadow maps, scene colour) for a froxel scene,
-    plus the cascaded maps of directional lights (:meth:`render_cascades`). The killzone raster neither lights
-    nor shadows directional lights: it sees them dark (:func:`raster_scene`), so the scene colour lacks them."""
+    """The killzone port's raster passes (depth, spot and cube shadow maps, the cascades of directional lights,
+    scene colour) for a froxel scene: what the froxel port implements is checked instead of the killzone's, and
+    the raster switches are a froxel variant's (:data:`fx_variants.VARIANTS`, ``raster``)."""
 
-    def __init__(self, scene, dev):
-        super().__init__(raster_scene(scene), dev)
-        self.full_scene = scene
-        self.render_cascades()
+    @staticmethod
+    def raster_switches(variant: str) -> dict:
+        return VARIANTS[variant].raster
 
     @staticmethod
     def _check_scene(scene):
@@ -161,88 +137,6 @@ class Raster(kz_port.KillzonePort):
                      if li.shadows and li.shadows.filter == "exact"]
         if problems:
             raise ValueError("the froxel port does not implement: " + ", ".join(problems))
-
-    def render_cascades(self):
-        """Per directional light with shadows: ``shadows.cascades`` orthographic reversed-Z maps, one per slice
-        of the view frustum between the split depths (up to ``min(shadows.distance, camera.far)``), each
-        covering the slice's bounding sphere in the light's frame (``look_frame(direction)``), its view plane
-        ``back`` before the centre so that every caster lies in front. Fills ``cascade_tex`` (depth32float
-        array), ``cascade_info`` (per cascade: centre, radius; back, far), ``cascade_first`` (per light: its
-        first cascade or -1), ``cascade_splits`` (per light) and ``cascade_tiles`` (light, view, projection,
-        layer, res)."""
-        wgpu, cam, d = self.wgpu, self.cam, self.device
-        tris = kz_scene.tessellate(self.scene, cam.eye, plane_half=cam.far)
-        verts = tris[:, :3].astype(np.float64)
-        self.cascade_first, self.cascade_tiles, self.cascade_splits, info, blocks = [], [], {}, [], []
-        res = 1
-        for i, light in enumerate(self.full_scene.lights):
-            sh = light.shadows
-            if light.type != "directional" or sh is None or not sh.enabled:
-                self.cascade_first.append(-1)
-                continue
-            self.cascade_first.append(len(self.cascade_tiles))
-            res = max(res, sh.resolution)
-            frame = kz_scene.look_frame(light.direction)
-            fwd = frame[:, 2]
-            far_c = min(sh.distance, cam.far)
-            splits = cascade_splits(cam.near, max(far_c, cam.near * (1.0 + 1e-6)), sh.cascades, sh.split_lambda)
-            self.cascade_splits[i] = splits
-            for k in range(sh.cascades):
-                centre, radius = frustum_sphere(cam, splits[k], splits[k + 1])
-                back = radius + max(0.0, float(((centre - verts) @ fwd).max())) + 1.0
-                far = back + radius
-                view = kz_scene.view_matrix(centre - back * fwd, frame)
-                proj = orthographic_reversed(radius, far)
-                info.append([*centre, radius, back, far, 0.0, 0.0])
-                blocks.append((np.concatenate([(proj @ view).T.reshape(-1), view.T.reshape(-1),
-                                               [0.0, far, sh.bias, sh.slope_bias]]), sh.resolution))
-                self.cascade_tiles.append((i, view, proj, len(self.cascade_tiles), sh.resolution))
-        self.cascade_info = self._buffer(np.asarray(info or [[0.0] * 8]), wgpu.BufferUsage.STORAGE)
-        self.cascade_tex = d.create_texture(size=(res, res, max(len(blocks), 1)), format="depth32float",
-                                            usage=self.rt_usage)
-        if not blocks:
-            return
-        module = d.create_shader_module(code=(KZ / "shaders" / "shadow.wgsl").read_text() + "\n"
-                                        + (SHADERS / "cascade.wgsl").read_text())
-        layout = {"array_stride": 36, "step_mode": "vertex", "attributes": [
-            {"format": "float32x3", "offset": 0, "shader_location": 0},
-            {"format": "float32x3", "offset": 12, "shader_location": 1},
-            {"format": "float32x3", "offset": 24, "shader_location": 2}]}
-        pipe = d.create_render_pipeline(
-            layout="auto", vertex={"module": module, "entry_point": "vs_main", "buffers": [layout]},
-            primitive={"topology": "triangle-list", "cull_mode": "none"},
-            depth_stencil={"format": "depth32float", "depth_write_enabled": True, "depth_compare": "greater"},
-            multisample=None, fragment={"module": module, "entry_point": "fs_ortho", "targets": []})
-        vbuf = self._buffer(tris, wgpu.BufferUsage.VERTEX)
-        binds = [(self._bind(pipe, 0, [self._ubuf(self._buffer(b, wgpu.BufferUsage.UNIFORM))]), r) for b, r in blocks]
-
-        def cascades(enc):
-            for layer, (bind, r) in enumerate(binds):
-                view = self.cascade_tex.create_view(dimension="2d", base_array_layer=layer, array_layer_count=1)
-                rp = enc.begin_render_pass(color_attachments=[], depth_stencil_attachment={
-                    "view": view, "depth_clear_value": 0.0, "depth_load_op": "clear", "depth_store_op": "store"})
-                rp.set_pipeline(pipe)
-                rp.set_bind_group(0, bind)
-                rp.set_viewport(0, 0, r, r, 0, 1)
-                rp.set_vertex_buffer(0, vbuf)
-                rp.draw(len(tris))
-                rp.end()
-
-        self._timed("cascades", cascades)
-
-    def raster_buffers(self) -> dict:
-        """The killzone raster's buffers, with each cascade as a tile of its light (no face name)."""
-        out = super().raster_buffers()
-        out["tiles"] += [(i, "", view, proj, self.read(self.cascade_tex, layer)[:res, :res])
-                         for i, view, proj, layer, res in self.cascade_tiles]
-        return out
-
-
-def raster_scene(scene):
-    """``scene`` as the killzone raster sees it: directional lights dark and unshadowed (see :class:`Raster`)."""
-    lights = tuple(dataclasses.replace(li, intensity=0.0, shadows=None) if li.type == "directional" else li
-                   for li in scene.lights)
-    return scene.replace(lights=lights)
 
 
 @dataclasses.dataclass
@@ -256,10 +150,10 @@ class FrameSetup:
 
 
 class FroxelPort:
-    """A sequence of frames of one scene on one device: raster passes at construction, froxel passes per
-    variant (:meth:`run`)."""
+    """A sequence of frames of one scene on one device: raster passes at construction (with the raster switches
+    of ``raster_variant``), froxel passes per variant (:meth:`run`)."""
 
-    def __init__(self, scene, frames, dev=None):
+    def __init__(self, scene, frames, dev=None, raster_variant: str = "faithful"):
         import wgpu
         from vlref.scene.animation import scene_at
 
@@ -278,7 +172,10 @@ class FroxelPort:
         self.setups = []
         for f in frames:
             s = scene_at(scene.replace(render=dataclasses.replace(scene.render, frame=int(f))))
-            raster = Raster(s, (self.adapter, self.device))
+            raster = Raster(s, (self.adapter, self.device), raster_variant)
+            if VARIANTS[raster_variant].stale_raster_camera and self.setups:   # the planted bug: G-buffer and
+                raster.globals = raster.globals_buffer(self.setups[0].raster.cam)  # lighting keep frame 0's camera
+                raster.render_scene()
             cam = raster.cam
             far = max(min(s.render.max_distance, cam.far), cam.near * (1.0 + 1e-6))
             self.setups.append(FrameSetup(int(f), s, raster, (cam.near, far)))
@@ -388,7 +285,7 @@ class FroxelPort:
                                     [float(p.history_clamp), float(prev is not None), 0, 0]])
             fx = {"buffer": self._buffer(block, uniform), "offset": 0, "size": block.size * 4}
             sl = {"buffer": slices, "offset": 0, "size": slices.size}
-            lights = self._buffer(light_blocks(fs.scene, r.layers, r.cascade_first), storage)
+            lights = self._buffer(light_blocks(fs.scene, r.layers), storage)
             scatter, integrated = self._grid(), self._grid()
             self._dispatch("inject", self._pipeline("inject", ov), {
                 0: fx, 1: sl, 2: {"buffer": lights, "offset": 0, "size": lights.size},
@@ -434,15 +331,21 @@ class FroxelPort:
 
 def export(port: FroxelPort, out_dir, scene_ref: str, overrides=(), frames_out=None) -> list[Path]:
     """Per frame ``out_dir/frame_NNNN/``: the raster buffers and ``port.toml`` (:func:`kz_port.export`, with
-    ``render.frame=F`` in its ``set``) and every froxel pass as ``port_<buffer>.npy``; the manifests' paths."""
+    ``render.frame=F`` in its ``set``) and, given ``frames_out`` (:meth:`FroxelPort.run`), every pass as
+    ``port_<buffer>.npy``, declared with its preset in ``[[passes]]`` (:data:`PASSES`) and ``final`` (what
+    ``vlref verdict`` reads); the manifests' paths."""
     paths = []
     for fs, passes in zip(port.setups, frames_out or [{}] * len(port.setups)):
         path = kz_port.export(fs.raster, Path(out_dir) / f"frame_{fs.frame:04d}", scene_ref,
-                              [*overrides, f"render.frame={fs.frame}"], passes)
+                              [*overrides, f"render.frame={fs.frame}"])
         text = path.read_text()
-        for i, splits in fs.raster.cascade_splits.items():   # cascades: their split depths (PORTING §2)
-            head = f"[[shadow_maps]]\nlight = {i}\n"
-            text = text.replace(head, head + f"splits = {kz_port._toml(splits)}\n")
+        if "final" in passes:
+            top = 'colour = "colour.npy"\n'
+            text = text.replace(top, top + 'final = "port_final.npy"\n', 1)
+        for name, preset in PASSES:
+            if name in passes:
+                np.save(path.parent / f"port_{name}.npy", np.asarray(passes[name], dtype=np.float32))
+                text += f'\n[[passes]]\nname = "{name}"\nbuffer = "{name}"\npath = "port_{name}.npy"\npreset = "{preset}"\n'
         path.write_text(text)
         paths.append(path)
     return paths

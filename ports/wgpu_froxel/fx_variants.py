@@ -3,6 +3,10 @@
 Each variant sets WGSL override constants (declared in ``shaders/*.wgsl``) and/or host-side switches;
 ``expect`` is what vlref must say about it: ``pass`` (every pass of every frame within its preset, at
 <= 0.5x of every bound) or ``fail`` (some pass of some frame beyond its preset: :mod:`fx_check`).
+A raster variant (:attr:`Variant.is_raster`) plants its bug in the raster passes (the killzone port's,
+``ports/wgpu/shaders``: ``raster`` override constants, or a host switch) instead: vlref's march on the port's
+own buffers inherits the bug, so it passes there, and only the verdict against the scene
+(:func:`fx_check.sequence_verdict`) can fail it.
 """
 
 from __future__ import annotations
@@ -19,6 +23,14 @@ class Variant:
     depth_distribution: Optional[float] = None   # host: slice law λ (None: the scene's)
     frozen_jitter: bool = False                  # host: frame 0's Halton point every frame
     partial_groups: bool = False                 # host: floor(size / 8) workgroups per axis
+    raster: dict = field(default_factory=dict)   # override constants of the raster passes (ports/wgpu/shaders)
+    stale_raster_camera: bool = False            # host: G-buffer and lighting keep frame 0's camera (raster)
+    scene: Optional[str] = None                  # the one scene whose motion shows a raster bug (None: every one)
+
+    @property
+    def is_raster(self) -> bool:
+        """True when the bug lives in the raster passes (the port's exported inputs), not the froxel passes."""
+        return bool(self.raster) or self.stale_raster_camera
 
 
 VARIANTS = {
@@ -42,4 +54,8 @@ VARIANTS = {
                              partial_groups=True),
     "no_transmittance_carry": Variant("transmittance not carried across slices (restarts at 1 per slice)", "fail",
                                       {"BUG_NO_TRANSMITTANCE_CARRY": 1}),
+    # a planted raster bug: own buffers pass (vlref marches on the buggy maps), the scene fails
+    "stale_raster_camera": Variant("the G-buffer and lighting passes keep frame 0's camera (their uniform is not "
+                                   "updated per frame); shadow maps, froxel passes and manifest have each frame's",
+                                   "fail", stale_raster_camera=True, scene="anim_sun"),
 }

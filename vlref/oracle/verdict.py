@@ -1,4 +1,6 @@
-"""The whole-frame verdict on a GPU port: ``vlref verdict PORT.toml -o DIR`` (:func:`judge`).
+"""The whole-frame verdict on a GPU port: ``vlref verdict PORT.toml -o DIR`` (:func:`judge`), and on every
+frame of a sequence, temporal history carried on both sides: ``vlref verdict A.toml B.toml ... -o DIR``
+(:func:`judge_sequence`).
 
 A port passes only when two judgments pass:
 
@@ -70,8 +72,8 @@ from .edges import block_any, depth_discontinuities, dilate, edge_zone
 from .presets import tolerance
 from .report import json_ready, write_outputs
 
-__all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict", "judge",
-           "shadow_zone", "write_verdict"]
+__all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict",
+           "SequenceVerdict", "judge", "judge_sequence", "shadow_zone", "write_verdict"]
 
 GROUP_OWN = "own buffers"
 GROUP_SCENE = "against the scene"
@@ -135,6 +137,41 @@ class Verdict:
                         f"| {p.reason or '-'} |")
         rows.append(f"\n{'PASS' if self.passed else 'FAIL'}: {sum(p.passed for p in self.passes)} of "
                     f"{len(self.passes)} comparisons pass")
+        return "\n".join(rows)
+
+
+@dataclass(frozen=True)
+class SequenceVerdict:
+    """The whole-frame verdict on a sequence (:func:`judge_sequence`): each frame's :class:`Verdict`, in
+    order; passed when every frame passed."""
+
+    passed: bool
+    frames: tuple[Verdict, ...]
+
+    def failures(self) -> list[tuple[int, PassVerdict]]:
+        """``(frame index, comparison)`` of every failing comparison, frame by frame in the verdict's order."""
+        return [(i, p) for i, v in enumerate(self.frames) for p in v.passes if not p.passed]
+
+    def to_dict(self) -> dict:
+        """What the sequence's ``verdict.json`` holds: the outcome, each failure by frame and pass, and every
+        frame's verdict (:meth:`Verdict.to_dict`) under ``frames``."""
+        return {"verdict": "pass" if self.passed else "fail", "passed": self.passed,
+                "failures": [{"frame": i, "name": p.name, "group": p.group, "preset": p.preset, "reason": p.reason}
+                             for i, p in self.failures()],
+                "frames": [{"frame": i, **v.to_dict()} for i, v in enumerate(self.frames)]}
+
+    def table(self) -> str:
+        """Every comparison of every frame as one Markdown table (frame, pass, group, preset, result, failing
+        pixels, margins, reason), then the failures by frame and pass."""
+        rows = ["| frame | pass | group | preset | result | failing pixels | margins | reason |",
+                "|---|---|---|---|---|---|---|---|"]
+        for i, v in enumerate(self.frames):
+            rows += [f"| {i} {line}" for line in v.table().splitlines()[2:] if line.startswith("|")]
+        total = sum(len(v.passes) for v in self.frames)
+        failures = self.failures()
+        rows.append(f"\n{'PASS' if self.passed else 'FAIL'}: {total - len(failures)} of {total} comparisons over "
+                    f"{len(self.frames)} frames pass")
+        rows += [f"- frame {i}, {p.name} ({p.group}): {p.reason}" for i, p in failures]
         return "\n".join(rows)
 
 
@@ -445,24 +482,90 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
     (unknown preset, missing shadow map of a shadowed light, a pass naming no vlref buffer, sizes that differ).
     """
     port = load_port(manifest, overrides)
+    _check_presets(port, preset)
+    verdict, comparisons, _ = _judge_frame(manifest, port, preset, out_dir, {} if cache is None else cache, None)
+    if out_dir is not None:
+        write_verdict(verdict, comparisons, out_dir)
+    return verdict
+
+
+def judge_sequence(manifests: Sequence, out_dir=None, preset: str | None = None, overrides: Sequence[str] = (),
+                   *, cache: dict | None = None) -> SequenceVerdict:
+    """The whole-frame verdict on every frame of a sequence of port manifests, in order (the frames of
+    ``vlref march A.toml B.toml ...``): frame ``i`` is judged as :func:`judge` judges one manifest, but with
+    temporal state carried on both sides. On its own buffers, vlref's march on frame ``i``'s buffers is
+    given the history of its march on frames ``0 .. i-1`` (:func:`vlref.port.march_sequence`); against the
+    scene, vlref's render of frame ``i`` is given the history of its renders of frames ``0 .. i-1``
+    (:func:`vlref.sequence.render_sequence`), so a port's reprojection, clamp and accumulation meet the
+    scene's too. The first frame starts without history on both sides.
+
+    With ``out_dir``: ``frame_NNNN/`` (NNNN the frame's index in ``manifests``) holding that frame's
+    verdict.json, index.html and reports, plus the sequence's verdict.json and index.html naming the frame
+    and pass of every failure (all or nothing). Every manifest is read and every preset checked before any
+    work. ``preset``, ``overrides`` and ``cache`` as for :func:`judge` (cache entries are keyed by the
+    frame's content and by every frame before it)."""
+    if not manifests:
+        raise InputError("<command line>", "manifest", "no port manifest to judge")
+    ports = [load_port(m, overrides) for m in manifests]
+    for port in ports:
+        _check_presets(port, preset)
+    cache = {} if cache is None else cache
+    frames, written, state = [], [], None
+    for i, (manifest, port) in enumerate(zip(manifests, ports)):
+        folder = None if out_dir is None else Path(out_dir) / _frame_folder(i)
+        verdict, comparisons, state = _judge_frame(manifest, port, preset, folder, cache, state)
+        frames.append(verdict)
+        written.append(comparisons)
+    result = SequenceVerdict(all(v.passed for v in frames), tuple(frames))
+    if out_dir is not None:
+        with output_dir(out_dir) as tmp:
+            for i, (verdict, comparisons) in enumerate(zip(frames, written)):
+                _write_files(verdict, comparisons, tmp / _frame_folder(i))
+            write_text(tmp / "verdict.json", json.dumps(json_ready(result.to_dict()), indent=2, allow_nan=False)
+                       + "\n")
+            write_text(tmp / "index.html", _sequence_html(result))
+    return result
+
+
+def _frame_folder(index: int) -> str:
+    return f"frame_{index:04d}"
+
+
+def _check_presets(port, preset: str | None) -> None:
+    """Unknown presets are bad input before any work."""
     own_preset = port.preset or preset or DEFAULT_PRESET
     for name in {own_preset, *(p.preset for p in port.passes if p.preset), *SCENE_PRESETS.values()}:
-        tolerance(name)  # unknown presets are bad input before any work
-    technique = TECHNIQUES[port.scene.render.technique]
+        tolerance(name)
 
-    cache = {} if cache is None else cache
+
+def _judge_frame(manifest, port, preset: str | None, out_dir, cache: dict, previous):
+    """``(verdict, comparisons, state)`` of one frame; ``previous`` is the state of the frame before it (None:
+    no history): the cache keys of vlref's render of the scene and of its march on the port's buffers, under
+    which their histories are kept, so that each key names the frame's content and all the frames before it
+    that left a history (a frame after one without history, e.g. of a technique without temporal state, is
+    keyed by its content alone and shares the cache with a first frame)."""
+    own_preset = port.preset or preset or DEFAULT_PRESET
+    technique = TECHNIQUES[port.scene.render.technique]
+    scene_before, port_before = (key if key is not None and cache[key][3] is not None else None
+                                 for key in (previous if previous is not None else (None, None)))
+
     scene = port.scene if port.has_shadows else _scene_without_shadows(port.scene)
-    key = ("scene", scene_hash(scene))
-    if key not in cache:
+    scene_key = ("scene", scene_hash(scene), scene_before)
+    if scene_key not in cache:
         frame = prepare_frame(scene)
+        frame.history = cache[scene_before][3] if scene_before is not None else None
         reference = technique.render(frame.scene, frame)
-        cache[key] = frame, reference, bool(np.any(np.asarray(reference["inscatter"]) > 0))
-    frame, reference, light_reaches = cache[key]
-    key = ("port", _port_digest(port))
-    if key not in cache:
+        history = reference.pop("history", None)
+        cache[scene_key] = frame, reference, bool(np.any(np.asarray(reference["inscatter"]) > 0)), history
+    frame, reference, light_reaches, _ = cache[scene_key]
+    port_key = ("port", _port_digest(port), port_before)
+    if port_key not in cache:
         frame_p = port_frame(port)
-        cache[key] = frame_p, technique.render(port.scene, frame_p), {}
-    frame_p, own, memo = cache[key]
+        frame_p.history = cache[port_before][3] if port_before is not None else None
+        own = technique.render(port.scene, frame_p)
+        history = own.pop("history", None)
+        cache[port_key] = frame_p, own, {}, history
+    frame_p, own, memo, _ = cache[port_key]
 
     comparisons = _own_passes(port, frame_p, own, own_preset, reference, technique, memo)
     comparisons.append(_camera_check(port, frame.camera))
@@ -471,9 +574,7 @@ def judge(manifest, out_dir=None, preset: str | None = None, overrides: Sequence
                                str(Path(out_dir) / _slug(c.group) / _slug(c.name) / "report.html")
                                if out_dir is not None and c.report is not None else None) for c in comparisons)
     verdict = Verdict(all(p.passed for p in passes), str(manifest), own_preset, passes)
-    if out_dir is not None:
-        write_verdict(verdict, comparisons, out_dir)
-    return verdict
+    return verdict, comparisons, (scene_key, port_key)
 
 
 def _against_scene(port, frame, frame_p, reference: dict, light_reaches: bool,
@@ -579,11 +680,50 @@ def write_verdict(verdict: Verdict, comparisons: Sequence[_Comparison], out_dir)
     """verdict.json, index.html and each comparison's report folder (:func:`vlref.oracle.report.write_outputs`)
     into ``out_dir``, all or nothing."""
     with output_dir(out_dir) as tmp:
-        for c in comparisons:
-            if c.report is not None:
-                write_outputs(c.report, tmp / _slug(c.group) / _slug(c.name))
-        write_text(tmp / "verdict.json", json.dumps(json_ready(verdict.to_dict()), indent=2, allow_nan=False) + "\n")
-        write_text(tmp / "index.html", _index_html(verdict))
+        _write_files(verdict, comparisons, tmp)
+
+
+def _write_files(verdict: Verdict, comparisons: Sequence[_Comparison], folder: Path) -> None:
+    """What :func:`write_verdict` writes, into ``folder`` (created)."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for c in comparisons:
+        if c.report is not None:
+            write_outputs(c.report, folder / _slug(c.group) / _slug(c.name))
+    write_text(folder / "verdict.json", json.dumps(json_ready(verdict.to_dict()), indent=2, allow_nan=False) + "\n")
+    write_text(folder / "index.html", _index_html(verdict))
+
+
+def _sequence_html(result: SequenceVerdict) -> str:
+    """The sequence's page: one row per frame (its manifest, outcome and failing comparisons, linking to the
+    frame's own index.html and to each failing report)."""
+    rows = []
+    for i, v in enumerate(result.frames):
+        folder = _frame_folder(i)
+        bad = [p for p in v.passes if not p.passed]
+        links = ", ".join(f'<a href="{folder}/{_slug(p.group)}/{_slug(p.name)}/report.html">{html.escape(p.name)}</a>'
+                          if p.report else html.escape(p.name) for p in bad) or "-"
+        style = "" if v.passed else ' style="color:#cf222e"'
+        rows.append(f'<tr{style}><td><a href="{folder}/index.html">{i}</a></td><td>{html.escape(v.manifest)}</td>'
+                    f"<td>{'PASS' if v.passed else 'FAIL'}</td><td>{len(v.passes) - len(bad)} of {len(v.passes)}</td>"
+                    f"<td>{links}</td></tr>")
+    return _page(result.passed, f"vlref verdict of {len(result.frames)} frames", f"""
+<p>Each frame judged on the port's own buffers and against the scene, temporal state carried on both sides.</p>
+<table><tr><th>frame</th><th>manifest</th><th>result</th><th>comparisons passed</th><th>failing</th></tr>
+{''.join(rows)}</table>
+""")
+
+
+def _page(passed: bool, heading: str, body: str) -> str:
+    """A verdict page: ``heading: PASS`` (green) or ``FAIL`` (red), then ``body`` (HTML)."""
+    word = "PASS" if passed else "FAIL"
+    colour = "#1a7f37" if passed else "#cf222e"
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>vlref verdict: {word}</title>
+<style>body {{ font-family: system-ui, sans-serif; margin: 1.5em; }} h1 span {{ color: {colour}; }}
+table {{ border-collapse: collapse; font-size: 0.9em; }} td, th {{ border: 1px solid #d0d7de; padding: 2px 8px; }}
+img {{ image-rendering: pixelated; }}</style></head><body>
+<h1>{heading}: <span>{word}</span></h1>{body}</body></html>
+"""
 
 
 def _index_html(verdict: Verdict) -> str:
@@ -604,18 +744,10 @@ def _index_html(verdict: Verdict) -> str:
             figures.append(f'<figure><figcaption>{html.escape(p.name)} ({html.escape(p.group)}): |port - vlref|'
                            f'</figcaption><a href="{rel}"><img src="{_slug(p.group)}/{_slug(p.name)}/heatmap.png" '
                            f'width="480"></a></figure>')
-    word = "PASS" if verdict.passed else "FAIL"
-    colour = "#1a7f37" if verdict.passed else "#cf222e"
-    return f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>vlref verdict: {word}</title>
-<style>body {{ font-family: system-ui, sans-serif; margin: 1.5em; }} h1 span {{ color: {colour}; }}
-table {{ border-collapse: collapse; font-size: 0.9em; }} td, th {{ border: 1px solid #d0d7de; padding: 2px 8px; }}
-img {{ image-rendering: pixelated; }}</style></head><body>
-<h1>vlref verdict: <span>{word}</span></h1>
+    return _page(verdict.passed, "vlref verdict", f"""
 <p>{html.escape(verdict.manifest)}: a port passes when every comparison passes, on its own buffers and against
 the scene.</p>
 <table><tr><th>pass</th><th>group</th><th>preset</th><th>result</th><th>failing pixels</th><th>margins</th>
 <th>reason</th></tr>{''.join(rows)}</table>
 {''.join(figures)}
-</body></html>
-"""
+""")

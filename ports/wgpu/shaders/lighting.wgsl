@@ -1,10 +1,13 @@
-// Pass 3: the lit scene colour (deferred): albedo (sum E max(0, n.l) V / pi + ambient); sky colour.
+// Pass 3: the lit scene colour (deferred): albedo (sum E max(0, n.l) V / pi + ambient); sky colour. V: one
+// texel of the light's map (spot, point) or of its cascade (directional).
 @group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var shadow_tex: texture_depth_2d_array;
 @group(0) @binding(3) var depth_tex: texture_depth_2d;
 @group(0) @binding(4) var normal_tex: texture_2d<f32>;
 @group(0) @binding(5) var albedo_tex: texture_2d<f32>;
+@group(0) @binding(6) var cascade_tex: texture_depth_2d_array;
+@group(0) @binding(7) var<storage, read> cascades: array<vec4f>;
 
 override BUG_NO_INV_PI: bool = false;         // Lambert without its 1/pi
 override BUG_EYE_DEPTH_AS_RANGE: bool = false; // surface point at eye depth along the ray (as if ray length)
@@ -21,10 +24,17 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     let x = g.eye.xyz + d * select(z / dot(d, g.fwd.xyz), z, BUG_EYE_DEPTH_AS_RANGE) + 1e-3 * n;
     var s = vec3f(0.0);
     for (var k = 0u; k < arrayLength(&lights); k++) {
-        let inc = incidence(lights[k], x);
+        let li = lights[k];
+        let inc = incidence(li, x);
         let cos_n = dot(n, inc.l);
         if (cos_n > 0.0) {
-            s += inc.e * cos_n * shadow_visibility(lights[k], x);
+            var v: f32;
+            if (li.pos_kind.w == 2.0) {
+                v = cascade_visibility(li, x, n);
+            } else {
+                v = shadow_visibility(li, x);
+            }
+            s += inc.e * cos_n * v;
         }
     }
     let albedo = textureLoad(albedo_tex, px, 0).xyz;
