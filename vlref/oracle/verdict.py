@@ -63,7 +63,7 @@ from ..port import load_port, port_frame
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
 from ..render import prepare_frame, scene_hash
 from ..techniques import TECHNIQUES
-from .compare import Report, compare_arrays, margin
+from .compare import Report, compare_arrays, margin, scale_of
 from .edges import block_any, depth_discontinuities, dilate, edge_zone
 from .presets import tolerance
 from .report import json_ready, write_outputs
@@ -81,6 +81,10 @@ SCENE_PRESETS = {"depth": "raster-depth", "shadow_map": "raster-shadow-map", "sh
 KNIFE_EDGE = 1e-5
 """Relative nudge of the lights and the shadow-map distances that finds the knife-edge pixels of
 :func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
+DEPTH_ROUNDING = 2.0 ** -21
+"""Relative rounding of the camera depth a float32 port decodes from its depth buffer (:func:`rounding_spread`):
+4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
+0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules)."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
 MAP_JUMP = 5e-3
@@ -367,16 +371,59 @@ def knife_edges(port, frame_p, technique) -> dict[str, tuple[np.ndarray, np.ndar
     return out
 
 
+def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray]:
+    """Per float image buffer of the technique: ``(h, w, C)`` how far vlref's value moves when every camera depth
+    of the port moves by float32 rounding: the buffer rendered with ``depth · (1 ± DEPTH_ROUNDING · s)``, ``s`` a
+    fixed pattern of random signs (neighbouring depths round independently), its largest change from ``own``
+    (vlref's buffers on the port's depth) over both signs. A depth-aware pass (upsample and blur weights
+    ``1 / (|Δz| + ε)``, ε = 1 mm) multiplies a rounding of ~1e-6 m by up to ``z / ε``: a float32 port cannot be
+    held closer to vlref there than this spread."""
+    signs = np.random.default_rng(0).choice([-1.0, 1.0], size=port.depth.shape)
+    spread: dict[str, np.ndarray] = {}
+    for sign in (-1.0, 1.0):
+        moved = dataclasses.replace(port, depth=port.depth * (1.0 + sign * DEPTH_ROUNDING * signs))
+        for name, a in technique.render(port.scene, port_frame(moved)).items():
+            a, b = np.asarray(a), np.asarray(own.get(name))
+            if a.dtype.kind != "f" or a.ndim not in (2, 3) or b.shape != a.shape:
+                continue
+            with np.errstate(invalid="ignore"):
+                d = np.nan_to_num(np.abs(a - b), nan=0.0, posinf=0.0)
+            d = d[:, :, None] if d.ndim == 2 else d
+            spread[name] = np.maximum(spread.get(name, d), d)
+    return spread
+
+
 def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     """``ref`` with each knife-edge pixel replaced by whichever of vlref's decisions (``ref``, ``lo``, ``hi``)
-    lies closest to the port's value (largest channel difference): a knife-edge decision may go either way."""
+    lies closest to the port's value (largest channel difference): a knife-edge decision may go either way.
+    A pixel fed by several knife-edge samples (an upsampled or blurred one) may take some one way and some the
+    other: the port's value is then moved toward the chosen decision by up to ``|hi - lo|`` per channel."""
     jump, lo, hi = knife
     options = np.stack([ref, lo, hi])
     with np.errstate(invalid="ignore"):
         dist = np.nan_to_num(np.abs(options - test[None]), nan=np.inf).max(axis=3)
     pick = np.argmin(dist, axis=0)
     chosen = np.take_along_axis(options, pick[None, :, :, None], axis=0)[0]
-    return np.where(jump[:, :, None], chosen, ref)
+    with np.errstate(invalid="ignore"):
+        mixed = _within(chosen, test, np.nan_to_num(np.abs(hi - lo), nan=0.0, posinf=0.0))
+    return np.where(jump[:, :, None], mixed, ref)
+
+
+def _rounding_zone(tol, ref: np.ndarray, spread: np.ndarray, ignore_sky: bool) -> np.ndarray:
+    """(h, w) bool: the pixels where vlref's own rounding spread exceeds the preset's per-pixel threshold
+    ``abs_tol · S + rel_tol · |ref|`` in a channel (there the spread, not the preset, sets the tolerance)."""
+    finite = np.isfinite(ref)
+    compared = finite.all(axis=2) if ignore_sky else np.ones(ref.shape[:2], bool)
+    r = np.where(finite, ref, 0.0)
+    s = scale_of(tol, r, compared) if compared.any() else 0.0
+    return np.any(spread > tol.abs_tol * s + tol.rel_tol * np.abs(r), axis=2) & compared
+
+
+def _within(ref: np.ndarray, test: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """The value within ``spread`` of ``ref`` closest to ``test`` (per channel): ``ref`` where ``test`` is farther,
+    ``test`` itself where it is within; non-finite values keep ``ref``."""
+    ok = np.isfinite(ref) & np.isfinite(test)
+    return np.where(ok, np.clip(np.where(ok, test, 0.0), ref - spread, ref + spread), ref)
 
 
 def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique,
@@ -394,7 +441,8 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-    knife = memo["knife"]
+        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+    knife, rounding = memo["knife"], memo["rounding"]
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -405,15 +453,18 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         tol = tolerance(name_preset)
         if tol.edge_pixels not in zones:
             surface = _on_pixels(shadow_zone(frame_p.shadow_maps(), frame_p.lights, points, tol.edge_pixels), hit, False)
-            zones[tol.edge_pixels] = edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
+            zones[tol.edge_pixels] = (edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
+                                      if tol.edge_pixels > 0 else np.zeros(hit.shape, bool))
         ref = np.asarray(own[p.buffer], dtype=np.float64)
         ref = ref[:, :, None] if ref.ndim == 2 else ref
-        fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
+        fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1] and p.image.shape == ref.shape
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
-        if p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2] and p.image.shape == ref.shape:
+        if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
-            if zone is not None and tol.edge_pixels > 0:
-                zone = zone | knife[p.buffer][0]
+            zone = zone | knife[p.buffer][0]
+        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
+            zone = zone | _rounding_zone(tol, ref, rounding[p.buffer], p.ignore_sky)
+            ref = _within(ref, p.image, rounding[p.buffer])
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
