@@ -84,7 +84,14 @@ KNIFE_EDGE = 1e-5
 DEPTH_ROUNDING = 2.0 ** -21
 """Relative rounding of the camera depth a float32 port decodes from its depth buffer (:func:`rounding_spread`):
 4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
-0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules)."""
+0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules); two decodes then differ by up to 8 ulp."""
+ROUNDING_ZONE = 0.25
+"""A pixel is sensitive to the depths' rounding when vlref's spread there exceeds this share of the preset's
+per-pixel threshold (:func:`_rounding_zone`): the spread is measured at 4 ulp, a port's decode rounds by 1-4."""
+ROUNDING_REACH = 3
+"""The rounding zone is the sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
+sums its taps' changes (the killzone's 7-tap blur, 3 each side), which the periodic patterns of
+:func:`rounding_patterns` can cancel where a port's roundings do not."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
 MAP_JUMP = 5e-3
@@ -372,16 +379,15 @@ def knife_edges(port, frame_p, technique) -> dict[str, tuple[np.ndarray, np.ndar
 
 
 def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray]:
-    """Per float image buffer of the technique: ``(h, w, C)`` how far vlref's value moves when every camera depth
-    of the port moves by float32 rounding: the buffer rendered with ``depth · (1 ± DEPTH_ROUNDING · s)``, ``s`` a
-    fixed pattern of random signs (neighbouring depths round independently), its largest change from ``own``
-    (vlref's buffers on the port's depth) over both signs. A depth-aware pass (upsample and blur weights
-    ``1 / (|Δz| + ε)``, ε = 1 mm) multiplies a rounding of ~1e-6 m by up to ``z / ε``: a float32 port cannot be
-    held closer to vlref there than this spread."""
-    signs = np.random.default_rng(0).choice([-1.0, 1.0], size=port.depth.shape)
+    """Per float image buffer of the technique: ``(h, w, C)`` how far vlref's value moves when the port's camera
+    depths round differently: the buffer rendered with ``depth · (1 + DEPTH_ROUNDING · s)`` for each sign
+    pattern ``s`` of :func:`rounding_patterns`, its largest change from ``own`` (vlref's buffers on the port's
+    depth). A depth-aware pass weighs a tap by ``1 / (|z - z_k| + ε)`` (ε = 1 mm): a float32 decode moves
+    ``z - z_k`` by up to 8 ulp of z (~1e-6 z) and the weight by up to ``1e-6 z / ε``, far over float32's 1e-4
+    at 10 m, and the blur passes sum such changes over their taps."""
     spread: dict[str, np.ndarray] = {}
-    for sign in (-1.0, 1.0):
-        moved = dataclasses.replace(port, depth=port.depth * (1.0 + sign * DEPTH_ROUNDING * signs))
+    for signs in rounding_patterns(port.depth.shape):
+        moved = dataclasses.replace(port, depth=port.depth * (1.0 + DEPTH_ROUNDING * signs))
         for name, a in technique.render(port.scene, port_frame(moved)).items():
             a, b = np.asarray(a), np.asarray(own.get(name))
             if a.dtype.kind != "f" or a.ndim not in (2, 3) or b.shape != a.shape:
@@ -391,6 +397,16 @@ def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray
             d = d[:, :, None] if d.ndim == 2 else d
             spread[name] = np.maximum(spread.get(name, d), d)
     return spread
+
+
+def rounding_patterns(shape: tuple[int, int]) -> list[np.ndarray]:
+    """Four (H, W) patterns of signs ±1: bit ``b`` of ``(x mod 4) + 4 (y mod 4)``. Two pixels less than 4 apart in
+    x and in y (the reach of the killzone's upsample and blur taps) differ in one of the bits, so some pattern
+    moves their depths in opposite directions (random patterns leave a pair on one side in all four with
+    probability 1/16)."""
+    y, x = np.indices(shape)
+    code = x % 4 + 4 * (y % 4)
+    return [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
 
 
 def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
@@ -409,14 +425,25 @@ def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     return np.where(jump[:, :, None], mixed, ref)
 
 
-def _rounding_zone(tol, ref: np.ndarray, spread: np.ndarray, ignore_sky: bool) -> np.ndarray:
-    """(h, w) bool: the pixels where vlref's own rounding spread exceeds the preset's per-pixel threshold
-    ``abs_tol · S + rel_tol · |ref|`` in a channel (there the spread, not the preset, sets the tolerance)."""
-    finite = np.isfinite(ref)
-    compared = finite.all(axis=2) if ignore_sky else np.ones(ref.shape[:2], bool)
-    r = np.where(finite, ref, 0.0)
-    s = scale_of(tol, r, compared) if compared.any() else 0.0
-    return np.any(spread > tol.abs_tol * s + tol.rel_tol * np.abs(r), axis=2) & compared
+def _rounding_zone(tol, own: dict, rounding: dict, shape: tuple[int, int]) -> np.ndarray:
+    """(h, w) bool: the pixels within ``ROUNDING_REACH`` of a pixel of some ``shape``-sized buffer whose rounding
+    spread exceeds ``ROUNDING_ZONE`` of the preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a
+    channel: there float32 rounding of the depths, not the pass, can decide whether the pixel passes, and the
+    preset's edge tolerance applies."""
+    sensitive = np.zeros(shape, bool)
+    for name, spread in rounding.items():
+        if spread.shape[:2] != shape:
+            continue
+        ref = np.asarray(own[name], dtype=np.float64)
+        ref = ref[:, :, None] if ref.ndim == 2 else ref
+        finite = np.isfinite(ref)
+        compared = finite.all(axis=2)
+        if not compared.any():
+            continue
+        r = np.where(finite, ref, 0.0)
+        s = scale_of(tol, r, compared)
+        sensitive |= np.any(spread > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
+    return dilate(sensitive, ROUNDING_REACH)
 
 
 def _within(ref: np.ndarray, test: np.ndarray, spread: np.ndarray) -> np.ndarray:
@@ -463,7 +490,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
         if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
-            zone = zone | _rounding_zone(tol, ref, rounding[p.buffer], p.ignore_sky)
+            zone = zone | _rounding_zone(tol, own, rounding, ref.shape[:2])
             ref = _within(ref, p.image, rounding[p.buffer])
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
