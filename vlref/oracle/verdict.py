@@ -86,8 +86,9 @@ DEPTH_ROUNDING = 2.0 ** -21
 4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
 0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules); two decodes then differ by up to 8 ulp."""
 ROUNDING_ZONE = 0.25
-"""A pixel is sensitive to the depths' rounding when vlref's spread there exceeds this share of the preset's
-per-pixel threshold (:func:`_rounding_zone`): the spread is measured at 4 ulp, a port's decode rounds by 1-4."""
+"""A pixel is sensitive to rounding when vlref's spread there (:func:`_spread`) exceeds this share of the preset's
+per-pixel threshold (:func:`_rounding_zone`): the spread is measured at 4 ulp of the depths and 1e-5 of the
+lights, a port rounds by less."""
 ROUNDING_REACH = 3
 """The rounding zone is the sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
 sums its taps' changes (the killzone's 7-tap blur, 3 each side), which the periodic patterns of
@@ -425,14 +426,28 @@ def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     return np.where(jump[:, :, None], mixed, ref)
 
 
-def _rounding_zone(tol, own: dict, rounding: dict, shape: tuple[int, int]) -> np.ndarray:
-    """(h, w) bool: the pixels within ``ROUNDING_REACH`` of a pixel of some ``shape``-sized buffer whose rounding
-    spread exceeds ``ROUNDING_ZONE`` of the preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a
-    channel: there float32 rounding of the depths, not the pass, can decide whether the pixel passes, and the
-    preset's edge tolerance applies."""
+def _spread(rounding: dict, knife: dict) -> dict[str, np.ndarray]:
+    """Per buffer, how far vlref's value moves under changes of the port's inputs of float32's size: the larger of
+    :func:`rounding_spread` (the depths by 4 ulp) and ``|hi - lo|`` of :func:`knife_edges` (the lights and the
+    map distances by ``KNIFE_EDGE``: ~100x float32's rounding of the positions a port computes its march samples
+    and lookups with, whose own change a ray passing a point light within centimetres amplifies past 1e-4)."""
+    out = {}
+    for name, d in rounding.items():
+        if name in knife and knife[name][1].shape == d.shape:
+            with np.errstate(invalid="ignore"):
+                d = np.maximum(d, np.nan_to_num(np.abs(knife[name][2] - knife[name][1]), nan=0.0, posinf=0.0))
+        out[name] = d
+    return out
+
+
+def _rounding_zone(tol, own: dict, spread: dict, shape: tuple[int, int]) -> np.ndarray:
+    """(h, w) bool: the pixels within ``ROUNDING_REACH`` of a pixel of some ``shape``-sized buffer whose spread
+    (:func:`_spread`) exceeds ``ROUNDING_ZONE`` of the preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|``
+    in a channel: there float32 rounding of the port's inputs, not the pass, can decide whether the pixel passes,
+    and the preset's edge tolerance applies."""
     sensitive = np.zeros(shape, bool)
-    for name, spread in rounding.items():
-        if spread.shape[:2] != shape:
+    for name, d in spread.items():
+        if d.shape[:2] != shape:
             continue
         ref = np.asarray(own[name], dtype=np.float64)
         ref = ref[:, :, None] if ref.ndim == 2 else ref
@@ -442,7 +457,7 @@ def _rounding_zone(tol, own: dict, rounding: dict, shape: tuple[int, int]) -> np
             continue
         r = np.where(finite, ref, 0.0)
         s = scale_of(tol, r, compared)
-        sensitive |= np.any(spread > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
+        sensitive |= np.any(d > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
     return dilate(sensitive, ROUNDING_REACH)
 
 
@@ -468,8 +483,8 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
-    knife, rounding = memo["knife"], memo["rounding"]
+        memo["spread"] = _spread(rounding_spread(port, frame_p, technique, own), memo["knife"])
+    knife, spread = memo["knife"], memo["spread"]
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -489,9 +504,9 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
-        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
-            zone = zone | _rounding_zone(tol, own, rounding, ref.shape[:2])
-            ref = _within(ref, p.image, rounding[p.buffer])
+        if fits and p.buffer in spread and spread[p.buffer].shape == ref.shape:
+            zone = zone | _rounding_zone(tol, own, spread, ref.shape[:2])
+            ref = _within(ref, p.image, spread[p.buffer])
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
