@@ -86,11 +86,11 @@ DEPTH_ROUNDING = 2.0 ** -21
 4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
 0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules); two decodes then differ by up to 8 ulp."""
 ROUNDING_ZONE = 0.25
-"""A pixel is sensitive to rounding when vlref's spread there (:func:`_spread`) exceeds this share of the preset's
-per-pixel threshold (:func:`_rounding_zone`): the spread is measured at 4 ulp of the depths and 1e-5 of the
-lights, a port rounds by less."""
+"""A pixel is sensitive to rounding when vlref's spread there exceeds this share of the preset's per-pixel
+threshold (:func:`_sensitive`): the spread is measured at 4 ulp of the depths and 1e-5 of the lights, a port
+rounds by less."""
 ROUNDING_REACH = 3
-"""The rounding zone is the sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
+"""The rounding zone takes the depth-sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
 sums its taps' changes (the killzone's 7-tap blur, 3 each side), which the periodic patterns of
 :func:`rounding_patterns` can cancel where a port's roundings do not."""
 KNIFE_JUMP = 1e-3
@@ -426,39 +426,50 @@ def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     return np.where(jump[:, :, None], mixed, ref)
 
 
-def _spread(rounding: dict, knife: dict) -> dict[str, np.ndarray]:
-    """Per buffer, how far vlref's value moves under changes of the port's inputs of float32's size: the larger of
-    :func:`rounding_spread` (the depths by 4 ulp) and ``|hi - lo|`` of :func:`knife_edges` (the lights and the
-    map distances by ``KNIFE_EDGE``: ~100x float32's rounding of the positions a port computes its march samples
-    and lookups with, whose own change a ray passing a point light within centimetres amplifies past 1e-4)."""
+def _knife_spread(knife: dict) -> dict[str, np.ndarray]:
+    """Per buffer ``|hi - lo|`` of :func:`knife_edges`: how far vlref's value moves with the lights and the map
+    distances moved by ``KNIFE_EDGE`` (~100x float32's rounding of the positions a port computes its march
+    samples and lookups with; a ray passing a point light within centimetres amplifies a port's rounding past
+    1e-4 of the march, 13 pixels of the WebGPU port's 1280x720 frame on lavapipe)."""
     out = {}
-    for name, d in rounding.items():
-        if name in knife and knife[name][1].shape == d.shape:
-            with np.errstate(invalid="ignore"):
-                d = np.maximum(d, np.nan_to_num(np.abs(knife[name][2] - knife[name][1]), nan=0.0, posinf=0.0))
-        out[name] = d
+    for name, (_, lo, hi) in knife.items():
+        with np.errstate(invalid="ignore"):
+            out[name] = np.nan_to_num(np.abs(hi - lo), nan=0.0, posinf=0.0)
     return out
 
 
-def _rounding_zone(tol, own: dict, spread: dict, shape: tuple[int, int]) -> np.ndarray:
-    """(h, w) bool: the pixels within ``ROUNDING_REACH`` of a pixel of some ``shape``-sized buffer whose spread
-    (:func:`_spread`) exceeds ``ROUNDING_ZONE`` of the preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|``
-    in a channel: there float32 rounding of the port's inputs, not the pass, can decide whether the pixel passes,
-    and the preset's edge tolerance applies."""
-    sensitive = np.zeros(shape, bool)
-    for name, d in spread.items():
-        if d.shape[:2] != shape:
-            continue
-        ref = np.asarray(own[name], dtype=np.float64)
-        ref = ref[:, :, None] if ref.ndim == 2 else ref
-        finite = np.isfinite(ref)
-        compared = finite.all(axis=2)
-        if not compared.any():
-            continue
-        r = np.where(finite, ref, 0.0)
-        s = scale_of(tol, r, compared)
-        sensitive |= np.any(d > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
-    return dilate(sensitive, ROUNDING_REACH)
+def _sensitive(tol, ref: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the finite pixels of ``ref`` (``(h, w, C)``) where ``spread`` exceeds ``ROUNDING_ZONE`` of the
+    preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a channel."""
+    finite = np.isfinite(ref)
+    compared = finite.all(axis=2)
+    if not compared.any():
+        return compared
+    r = np.where(finite, ref, 0.0)
+    s = scale_of(tol, r, compared)
+    return np.any(spread > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
+
+
+def _rounding_zone(tol, own: dict, rounding: dict, knife_spread: dict, buffer: str) -> np.ndarray:
+    """(h, w) bool: where float32 rounding of the port's inputs, not the pass, can decide whether a pixel of
+    ``buffer`` passes (the preset's edge tolerance applies there): its own pixels sensitive to the knife-edge
+    nudges (:func:`_sensitive`), and every pixel within ``ROUNDING_REACH`` of a pixel of some buffer of its size
+    sensitive to the depths' rounding (:func:`rounding_spread`)."""
+    ref = _as_3d(own[buffer])
+    shape = ref.shape[:2]
+    depth = np.zeros(shape, bool)
+    for name, d in rounding.items():
+        if d.shape[:2] == shape:
+            depth |= _sensitive(tol, _as_3d(own[name]), d)
+    zone = dilate(depth, ROUNDING_REACH)
+    if buffer in knife_spread and knife_spread[buffer].shape == ref.shape:
+        zone |= _sensitive(tol, ref, knife_spread[buffer])
+    return zone
+
+
+def _as_3d(a) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)
+    return a[:, :, None] if a.ndim == 2 else a
 
 
 def _within(ref: np.ndarray, test: np.ndarray, spread: np.ndarray) -> np.ndarray:
@@ -483,8 +494,9 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-        memo["spread"] = _spread(rounding_spread(port, frame_p, technique, own), memo["knife"])
-    knife, spread = memo["knife"], memo["spread"]
+        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+    knife, rounding = memo["knife"], memo["rounding"]
+    knife_spread = _knife_spread(knife)
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -504,9 +516,12 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
-        if fits and p.buffer in spread and spread[p.buffer].shape == ref.shape:
-            zone = zone | _rounding_zone(tol, own, spread, ref.shape[:2])
-            ref = _within(ref, p.image, spread[p.buffer])
+        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
+            zone = zone | _rounding_zone(tol, own, rounding, knife_spread, p.buffer)
+            widen = rounding[p.buffer]
+            if p.buffer in knife_spread and knife_spread[p.buffer].shape == widen.shape:
+                widen = np.maximum(widen, knife_spread[p.buffer])
+            ref = _within(ref, p.image, widen)
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,
