@@ -29,7 +29,11 @@ whose map lookup lies within ``edge_pixels`` texels of a shadow silhouette of ei
 comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
 take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
-reference is whichever of vlref's two decisions lies closest to the port's value.
+reference is whichever of vlref's two decisions lies closest to the port's value. And a pixel whose vlref value
+moves by more than a quarter of the preset's per-pixel threshold under float32-sized changes of the port's
+inputs (:func:`rounding_spread`: its depths by 4 ulp, with the blur's reach; those nudges of the lights and maps)
+is in the zone too: its tolerance is the preset's edge tolerance plus that spread (``gpu-float32``, whose
+per-pixel bounds are float32's, relies on it; for the fp16 presets the spread is far below their bounds).
 
 Degenerate comparisons fail: when vlref's render of the scene says a buffer carries light (the pass's
 buffer, or for the final frame the in-scatter, is nonzero somewhere), a comparison whose reference is zero
@@ -509,8 +513,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
             surface = _on_pixels(shadow_zone(frame_p.shadow_maps(), frame_p.lights, points, tol.edge_pixels), hit, False)
             zones[tol.edge_pixels] = (edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
                                       if tol.edge_pixels > 0 else np.zeros(hit.shape, bool))
-        ref = np.asarray(own[p.buffer], dtype=np.float64)
-        ref = ref[:, :, None] if ref.ndim == 2 else ref
+        ref = _as_3d(own[p.buffer])
         fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1] and p.image.shape == ref.shape
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
