@@ -135,7 +135,7 @@ def test_presets_load_and_loosen_in_order():
     presets = load_presets()
     order = ["float32", "gpu-full", "gpu-half", "gpu-quarter"]
     assert set(presets) == {"exact", *order, "raster-depth", "raster-shadow-map", "raster-shadow-test",
-                            "raster-colour", "end-to-end", "gpu-sampled"}
+                            "raster-colour", "end-to-end", "gpu-sampled", "gpu-float32"}
     exact = presets["exact"]
     assert (exact.abs_tol, exact.rel_tol, exact.max_fail_fraction, exact.max_mean_abs) == (0, 0, 0, 0)
     for key in ("abs_tol", "rel_tol", "max_mean_abs", "edge_pixels", "edge_rel", "edge_abs"):

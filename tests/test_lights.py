@@ -13,7 +13,9 @@ from vlref.lights.cone import CONE_CODES, CONE_LINEAR, CONE_SMOOTHSTEP, CONE_UNI
 from vlref.lights.cookies import load_cookie, sample_texture, spot_cookie_uv
 from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B, I_ATT, I_CONE
 from vlref.lights.shading import light_incidence
-from vlref.scene.model import ATTENUATIONS, CONE_LAWS, Cookie, Light, Scene
+from vlref.render import prepare_frame
+from vlref.scene.model import (ATTENUATIONS, CONE_LAWS, Box, CameraSettings, Cookie, Light, Plane, RenderSettings,
+                               Scene, ShadowSettings)
 
 NO_LUT = np.zeros((0, 0))
 R = 10.0
@@ -173,3 +175,20 @@ def test_incidence_of_each_light_type():
     assert on_axis[4] == pytest.approx(2.0 / 16.0)
     assert light_incidence(p, 2, 3.0, 4.0, 0.0)[4] == 0.0  # outside the cone
     assert p.floats[0, F_CR] == 8.0
+
+
+def test_scene_colour_applies_the_lights_shadow_strength_to_surfaces():
+    """Surfaces see ``V = 1 - strength (1 - tr)`` as the march does (docs/PHYSICS.md): the colour is affine in
+    the strength, strength 0 lights the shadow as if the occluder cast none, strength 1 is the exact shadow."""
+    def colour(strength):
+        light = Light(type="point", position=(0.0, 4.0, 0.0), intensity=40.0, range=20.0,
+                      shadows=ShadowSettings(strength=strength))
+        scene = Scene(render=RenderSettings(width=40, height=30, ambient=(0.05, 0.05, 0.05)),
+                      camera=CameraSettings(position=(0.0, 6.0, -6.0), look_at=(0.0, 0.0, 0.5)), lights=(light,),
+                      objects=(Plane(), Box(center=(0.0, 2.0, 0.0), size=(1.0, 0.2, 1.0))))
+        return prepare_frame(scene).scene_colour
+
+    full, none, some = colour(1.0), colour(0.0), colour(0.3)
+    shadow = np.all(none > full + 1e-3, axis=2)   # receiver pixels the box shadows
+    assert shadow.sum() > 20 and np.allclose(full[shadow], 0.8 * 0.05)       # albedo x ambient only
+    np.testing.assert_allclose(some, full + 0.7 * (none - full), rtol=1e-12, atol=1e-15)

@@ -49,13 +49,13 @@ INCLUDES = {"gbuffer": ("common",), "shadow": (), "cascade": ("shadow",),
 RENDER_PASSES = ("gbuffer", "shadow", "cascades", "lighting")
 POST_PASSES = ("downsample", "volumes", "upsample", "blur_h", "blur_v", "composite")
 RES_FACTOR = {"full": 1, "half": 2, "quarter": 4}
-PASSES = (("depth_lo", "depth_half", "float32"), ("march", "march_half", None), ("upsample", "upsample", None),
+PASSES = (("depth_lo", "depth_half", "gpu-float32"), ("march", "march_half", None), ("upsample", "upsample", None),
           ("blur_h", "blur_h", None), ("blur_v", "blur_v", None), ("transmittance", "transmittance", None),
           ("final", "final", None))
 """(port output, the ``vlref march --stages`` buffer it reproduces, its preset): the manifest's ``[[passes]]``.
 The march runs at half resolution and the light buffers are fp16: the variant's preset (``gpu-half``; a
-float32 variant: ``float32``), None here. The min-depth downsample is exact up to float32 decoding:
-``float32``, sky texels (``inf`` in both) left out (``ignore_sky``)."""
+float32 variant: ``gpu-float32``), None here. The min-depth downsample is exact up to float32 decoding:
+``gpu-float32``, sky texels (``inf`` in both) left out (``ignore_sky``)."""
 
 
 BACKENDS = ("Vulkan", "Metal", "D3D12")

@@ -38,7 +38,7 @@ VARIANTS = {
     # benign: must pass
     "sum_order": Variant("upsample and blur sums in reversed tap order", "pass", {"BENIGN_REVERSED_SUM": 1}),
     "fp32": Variant("fp32 light buffers and final target instead of fp16", "pass", light_format="rgba32float",
-                    final_format="rgba32float", preset="float32"),
+                    final_format="rgba32float", preset="gpu-float32"),
     # planted bugs: must fail
     "steps_minus_one": Variant("march loop runs N - 1 samples, step still (b - a)/N", "fail",
                                {"BUG_STEPS_MINUS_ONE": 1}),

@@ -11,10 +11,13 @@ It returns the unit vector ``l`` from ``x`` toward the light (``-direction`` for
 and the distance to the light (``inf`` for a directional light).
 
 :func:`scene_colour` shades each G-buffer pixel:
-``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with ``V_l`` an exact RGB shadow
-ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed ``SURFACE_OFFSET`` along the
-normal); the medium does not attenuate surface lighting here (the volumetric pass applies the view
-transmittance). Pixels that hit nothing get ``render.sky_color``.
+``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with ``V_l = 1 − strength·(1 − tr)``,
+``tr`` an exact RGB shadow ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed
+``SURFACE_OFFSET`` along the normal) and ``strength`` the light's ``shadows.strength``
+(:func:`vlref.lights.shadowmaps.apply_strength`: the ``V`` of docs/PHYSICS.md "The integral", which the march
+applies in the medium, and a GPU port's lighting pass on its surfaces; a light without shadows, absent or
+disabled, shadows surfaces fully: strength 1); the medium does not attenuate surface lighting here (the
+volumetric pass applies the view transmittance). Pixels that hit nothing get ``render.sky_color``.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from .pack import (F_CB, F_CG, F_CK_SIZE, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, 
                    F_HALF_OUTER, F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B,
                    F_UX, F_UY, F_UZ, I_ATT, I_CK_FILTER, I_CK_H, I_CK_OFF, I_CK_W, I_CK_WRAP, I_CONE, I_KIND,
                    KIND_DIRECTIONAL, KIND_SPOT, PackedLights)
+from .shadow_lookup import apply_strength
 
 __all__ = ["light_incidence", "light_vector", "cookie_rgb", "scene_colour", "SURFACE_OFFSET"]
 
@@ -103,7 +107,7 @@ def light_incidence(lights, k, x, y, z):
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _shade(geo, lights, position, normal, albedo, emission, hit, ambient, sky, out):
+def _shade(geo, lights, strength, position, normal, albedo, emission, hit, ambient, sky, out):
     h, w = hit.shape
     inv_pi = 1.0 / math.pi
     for p in prange(h * w):
@@ -122,6 +126,8 @@ def _shade(geo, lights, position, normal, albedo, emission, hit, ambient, sky, o
             if cos_n <= 0.0 or er + eg + eb == 0.0:
                 continue
             vr, vg, vb = shadow_transmittance(geo, x, y, z, lx, ly, lz, dist)
+            if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
+                vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
             sr += er * cos_n * vr
             sg += eg * cos_n * vg
             sb += eb * cos_n * vb
@@ -133,7 +139,9 @@ def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
     out = np.empty(gbuffer.albedo.shape)
-    _shade(geometry.arrays, lights, gbuffer.position, gbuffer.normal, gbuffer.albedo, gbuffer.emission,
+    strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 1.0
+                         for li in scene.lights])
+    _shade(geometry.arrays, lights, strength, gbuffer.position, gbuffer.normal, gbuffer.albedo, gbuffer.emission,
            gbuffer.object_id >= 0, np.asarray(scene.render.ambient, dtype=np.float64),
            np.asarray(scene.render.sky_color, dtype=np.float64), out)
     return out

@@ -31,7 +31,7 @@ from .presets import Tolerance, tolerance
 from .report import write_outputs
 
 __all__ = [
-    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files", "margin",
+    "Check", "Report", "RULE", "build_mask", "compare_arrays", "compare_files", "margin", "scale_of",
 ]
 
 RULE = ("pixel fails when |test-ref| > abs_tol*S + rel_tol*|ref| in any channel; image passes when "
@@ -115,6 +115,11 @@ def margin(value: float, bound: float) -> float:
     return 0.0 if value == 0 else math.inf
 
 
+def scale_of(tol: Tolerance, ref: np.ndarray, mask: np.ndarray) -> float:
+    """The scale ``S`` of the rule: 1 (``"absolute"``) or the mean ``|ref|`` over the compared pixels (``"mean"``)."""
+    return 1.0 if tol.scale == "absolute" else float(np.mean(np.abs(ref[mask])))
+
+
 def _as_image(a) -> np.ndarray:
     a = np.asarray(a, dtype=np.float64)
     return a[:, :, None] if a.ndim == 2 else a
@@ -164,7 +169,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
     if n == 0:
         raise InputError(names[0], "mask", "the masks leave no pixel to compare")
 
-    s = 1.0 if tol.scale == "absolute" else float(np.mean(np.abs(r[mask])))
+    s = scale_of(tol, r, mask)
     abs_thr, mean_bound = tol.abs_tol * s, tol.max_mean_abs * s
     metrics = error_metrics(r, t, mask, abs_thr, tol.rel_tol)
     metrics["total_pixels"] = int(mask.size)

@@ -31,7 +31,11 @@ whose map lookup lies within ``edge_pixels`` texels of a shadow silhouette of ei
 comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
 take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
-reference is whichever of vlref's two decisions lies closest to the port's value.
+reference is whichever of vlref's two decisions lies closest to the port's value. And a pixel whose vlref value
+moves by more than a quarter of the preset's per-pixel threshold under float32-sized changes of the port's
+inputs (:func:`rounding_spread`: its depths by 4 ulp, with the blur's reach; those nudges of the lights and maps)
+is in the zone too: its tolerance is the preset's edge tolerance plus that spread (``gpu-float32``, whose
+per-pixel bounds are float32's, relies on it; for the fp16 presets the spread is far below their bounds).
 
 Degenerate comparisons fail: when vlref's render of the scene says a buffer carries light (the pass's
 buffer, or for the final frame the in-scatter, is nonzero somewhere), a comparison whose reference is zero
@@ -67,7 +71,7 @@ from ..port import load_port, port_frame
 from ..port.decode import FAR_VALUE, tile_points, tile_rays
 from ..render import prepare_frame, scene_hash
 from ..techniques import TECHNIQUES
-from .compare import Report, compare_arrays, margin
+from .compare import Report, compare_arrays, margin, scale_of
 from .edges import block_any, depth_discontinuities, dilate, edge_zone
 from .presets import tolerance
 from .report import json_ready, write_outputs
@@ -85,6 +89,18 @@ SCENE_PRESETS = {"depth": "raster-depth", "shadow_map": "raster-shadow-map", "sh
 KNIFE_EDGE = 1e-5
 """Relative nudge of the lights and the shadow-map distances that finds the knife-edge pixels of
 :func:`knife_edges`: ~100x float32's unit roundoff, the precision a port computes its lookups with."""
+DEPTH_ROUNDING = 2.0 ** -21
+"""Relative rounding of the camera depth a float32 port decodes from its depth buffer (:func:`rounding_spread`):
+4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
+0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules); two decodes then differ by up to 8 ulp."""
+ROUNDING_ZONE = 0.25
+"""A pixel is sensitive to rounding when vlref's spread there exceeds this share of the preset's per-pixel
+threshold (:func:`_sensitive`): the spread is measured at 4 ulp of the depths and 1e-5 of the lights, a port
+rounds by less."""
+ROUNDING_REACH = 3
+"""The rounding zone takes the depth-sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
+sums its taps' changes (the killzone's 7-tap blur, 3 each side), which the periodic patterns of
+:func:`rounding_patterns` can cancel where a port's roundings do not."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
 MAP_JUMP = 5e-3
@@ -406,16 +422,104 @@ def knife_edges(port, frame_p, technique) -> dict[str, tuple[np.ndarray, np.ndar
     return out
 
 
+def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray]:
+    """Per float image buffer of the technique: ``(h, w, C)`` how far vlref's value moves when the port's camera
+    depths round differently: the buffer rendered with ``depth · (1 + DEPTH_ROUNDING · s)`` for each sign
+    pattern ``s`` of :func:`rounding_patterns`, its largest change from ``own`` (vlref's buffers on the port's
+    depth). A depth-aware pass weighs a tap by ``1 / (|z - z_k| + ε)`` (ε = 1 mm): a float32 decode moves
+    ``z - z_k`` by up to 8 ulp of z (~1e-6 z) and the weight by up to ``1e-6 z / ε``, far over float32's 1e-4
+    at 10 m, and the blur passes sum such changes over their taps."""
+    spread: dict[str, np.ndarray] = {}
+    for signs in rounding_patterns(port.depth.shape):
+        moved = dataclasses.replace(port, depth=port.depth * (1.0 + DEPTH_ROUNDING * signs))
+        for name, a in technique.render(port.scene, port_frame(moved)).items():
+            a, b = np.asarray(a), np.asarray(own.get(name))
+            if a.dtype.kind != "f" or a.ndim not in (2, 3) or b.shape != a.shape:
+                continue
+            with np.errstate(invalid="ignore"):
+                d = np.nan_to_num(np.abs(a - b), nan=0.0, posinf=0.0)
+            d = d[:, :, None] if d.ndim == 2 else d
+            spread[name] = np.maximum(spread.get(name, d), d)
+    return spread
+
+
+def rounding_patterns(shape: tuple[int, int]) -> list[np.ndarray]:
+    """Four (H, W) patterns of signs ±1: bit ``b`` of ``(x mod 4) + 4 (y mod 4)``. Two pixels less than 4 apart in
+    x and in y (the reach of the killzone's upsample and blur taps) differ in one of the bits, so some pattern
+    moves their depths in opposite directions (random patterns leave a pair on one side in all four with
+    probability 1/16)."""
+    y, x = np.indices(shape)
+    code = x % 4 + 4 * (y % 4)
+    return [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
+
+
 def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
     """``ref`` with each knife-edge pixel replaced by whichever of vlref's decisions (``ref``, ``lo``, ``hi``)
-    lies closest to the port's value (largest channel difference): a knife-edge decision may go either way."""
+    lies closest to the port's value (largest channel difference): a knife-edge decision may go either way.
+    A pixel fed by several knife-edge samples (an upsampled or blurred one) may take some one way and some the
+    other: the port's value is then moved toward the chosen decision by up to ``|hi - lo|`` per channel."""
     jump, lo, hi = knife
     options = np.stack([ref, lo, hi])
     with np.errstate(invalid="ignore"):
         dist = np.nan_to_num(np.abs(options - test[None]), nan=np.inf).max(axis=3)
     pick = np.argmin(dist, axis=0)
     chosen = np.take_along_axis(options, pick[None, :, :, None], axis=0)[0]
-    return np.where(jump[:, :, None], chosen, ref)
+    with np.errstate(invalid="ignore"):
+        mixed = _within(chosen, test, np.nan_to_num(np.abs(hi - lo), nan=0.0, posinf=0.0))
+    return np.where(jump[:, :, None], mixed, ref)
+
+
+def _knife_spread(knife: dict) -> dict[str, np.ndarray]:
+    """Per buffer ``|hi - lo|`` of :func:`knife_edges`: how far vlref's value moves with the lights and the map
+    distances moved by ``KNIFE_EDGE`` (~100x float32's rounding of the positions a port computes its march
+    samples and lookups with; a ray passing a point light within centimetres amplifies a port's rounding past
+    1e-4 of the march, 13 pixels of the WebGPU port's 1280x720 frame on lavapipe)."""
+    out = {}
+    for name, (_, lo, hi) in knife.items():
+        with np.errstate(invalid="ignore"):
+            out[name] = np.nan_to_num(np.abs(hi - lo), nan=0.0, posinf=0.0)
+    return out
+
+
+def _sensitive(tol, ref: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """(h, w) bool: the finite pixels of ``ref`` (``(h, w, C)``) where ``spread`` exceeds ``ROUNDING_ZONE`` of the
+    preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a channel."""
+    finite = np.isfinite(ref)
+    compared = finite.all(axis=2)
+    if not compared.any():
+        return compared
+    r = np.where(finite, ref, 0.0)
+    s = scale_of(tol, r, compared)
+    return np.any(spread > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
+
+
+def _rounding_zone(tol, own: dict, rounding: dict, knife_spread: dict, buffer: str) -> np.ndarray:
+    """(h, w) bool: where float32 rounding of the port's inputs, not the pass, can decide whether a pixel of
+    ``buffer`` passes (the preset's edge tolerance applies there): its own pixels sensitive to the knife-edge
+    nudges (:func:`_sensitive`), and every pixel within ``ROUNDING_REACH`` of a pixel of some buffer of its size
+    sensitive to the depths' rounding (:func:`rounding_spread`)."""
+    ref = _as_3d(own[buffer])
+    shape = ref.shape[:2]
+    depth = np.zeros(shape, bool)
+    for name, d in rounding.items():
+        if d.shape[:2] == shape:
+            depth |= _sensitive(tol, _as_3d(own[name]), d)
+    zone = dilate(depth, ROUNDING_REACH)
+    if buffer in knife_spread and knife_spread[buffer].shape == ref.shape:
+        zone |= _sensitive(tol, ref, knife_spread[buffer])
+    return zone
+
+
+def _as_3d(a) -> np.ndarray:
+    a = np.asarray(a, dtype=np.float64)
+    return a[:, :, None] if a.ndim == 2 else a
+
+
+def _within(ref: np.ndarray, test: np.ndarray, spread: np.ndarray) -> np.ndarray:
+    """The value within ``spread`` of ``ref`` closest to ``test`` (per channel): ``ref`` where ``test`` is farther,
+    ``test`` itself where it is within; non-finite values keep ``ref``."""
+    ok = np.isfinite(ref) & np.isfinite(test)
+    return np.where(ok, np.clip(np.where(ok, test, 0.0), ref - spread, ref + spread), ref)
 
 
 def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, technique,
@@ -433,7 +537,9 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-    knife = memo["knife"]
+        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+    knife, rounding = memo["knife"], memo["rounding"]
+    knife_spread = _knife_spread(knife)
     out = []
     for k, p in enumerate(port.passes):
         if p.buffer not in own or np.asarray(own[p.buffer]).dtype.kind != "f":
@@ -444,15 +550,20 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         tol = tolerance(name_preset)
         if tol.edge_pixels not in zones:
             surface = _on_pixels(shadow_zone(frame_p.shadow_maps(), frame_p.lights, points, tol.edge_pixels), hit, False)
-            zones[tol.edge_pixels] = edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
-        ref = np.asarray(own[p.buffer], dtype=np.float64)
-        ref = ref[:, :, None] if ref.ndim == 2 else ref
-        fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1]
+            zones[tol.edge_pixels] = (edge_zone(tol.edge_pixels, depths=[port.depth], features=[surface])
+                                      if tol.edge_pixels > 0 else np.zeros(hit.shape, bool))
+        ref = _as_3d(own[p.buffer])
+        fits = ref.shape[0] <= hit.shape[0] and ref.shape[1] <= hit.shape[1] and p.image.shape == ref.shape
         zone = block_any(zones[tol.edge_pixels], ref.shape[:2]) if fits else None
-        if p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2] and p.image.shape == ref.shape:
+        if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
-            if zone is not None and tol.edge_pixels > 0:
-                zone = zone | knife[p.buffer][0]
+            zone = zone | knife[p.buffer][0]
+        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
+            zone = zone | _rounding_zone(tol, own, rounding, knife_spread, p.buffer)
+            widen = rounding[p.buffer]
+            if p.buffer in knife_spread and knife_spread[p.buffer].shape == widen.shape:
+                widen = np.maximum(widen, knife_spread[p.buffer])
+            ref = _within(ref, p.image, widen)
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))
         out.append(_compare(p.name, GROUP_OWN, ref, p.image, name_preset, mask, zone, signal, p.buffer,

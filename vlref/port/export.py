@@ -116,7 +116,7 @@ def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_enco
 
     Maps go one file per light (cube faces in a 3x2 atlas, cascades in an Nx1 atlas). ``passes``: also
     vlref's own pass outputs, as a port's (``final = "final.exr"`` and one ``[[passes]]`` entry per float image
-    buffer of the technique, ``port_<buffer>.npy`` float32, preset ``float32``): vlref as a port of itself,
+    buffer of the technique, ``port_<buffer>.npy`` float32, preset ``gpu-float32``): vlref as a port of itself,
     for ``vlref verdict``.
     """
     scene = load_scene(scene_ref, overrides)
@@ -140,7 +140,7 @@ def export_port(scene_ref, out_dir, overrides: Sequence[str] = (), *, depth_enco
     stages = {k: np.asarray(v, dtype=np.float32) for k, v in stages.items()
               if isinstance(v, np.ndarray) and v.dtype.kind == "f" and v.ndim in (2, 3)}
     if passes:
-        lines[2:2] = ['final = "final.exr"', 'preset = "float32"']
+        lines[2:2] = ['final = "final.exr"', 'preset = "gpu-float32"']
     lines += ["[depth]", 'path = "depth.exr"', f'encoding = "{depth_encoding}"', f'convention = "{depth_convention}"',
               f"near = {cam.near!r}", f"far = {cam.far!r}", f'uv_origin = "{uv_origin}"', ""]
     for name, a in stages.items():
