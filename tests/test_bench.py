@@ -42,6 +42,9 @@ def test_every_section_with_finite_positive_figures(report):
             assert value > 0, path
     assert {"one_spot", "four_lights"} <= set(report["march"])
     assert report["march"]["four_lights"]["samples"] > report["march"]["one_spot"]["samples"] > 0
+    for name in ("one_spot", "four_lights"):  # float32 marches the same (pixel, light) pairs
+        assert report["march"][name + "_float32"]["precision"] == "float32"
+        assert report["march"][name + "_float32"]["samples"] == report["march"][name]["samples"]
     assert "1" in report["scaling"]["threads"]
     assert isinstance(report["machine"]["llvm_cpu"], str) and report["machine"]["llvm_cpu"]
     ceiling = report["scaling"]["machine_ceiling"]

@@ -124,7 +124,7 @@ def format_report(r: dict) -> str:
              f"machine: {m['cpu_model']} (LLVM: {m['llvm_cpu']}), {m['cores_available']} cores, "
              f"{m['numba_threads']} Numba threads; numpy {m['numpy']}, numba {m['numba']}, python {m['python']}", ""]
     for name, s in r["march"].items():
-        lines.append(f"march {name:12s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "
+        lines.append(f"march {name:19s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "
                      f"{s['samples_per_s'] / 1e6:.2f} M samples/s ({s['samples_per_s_per_thread'] / 1e6:.2f} per thread)")
     b = r["baseline"]
     lines.append(f"numpy baseline {b['width']}x{b['height']}: {b['samples_per_s'] / 1e6:.3f} M samples/s; kernel/numpy "
