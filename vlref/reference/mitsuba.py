@@ -3,10 +3,12 @@
 Mitsuba 3 (``pip install mitsuba``, optional) with ``volpath`` and ``max_depth = 2`` solves the same single-scattering
 integral by Monte Carlo: the camera vertex and one scattering vertex, with next-event estimation toward the light.
 Matched conventions (docs/PHYSICS.md): Mitsuba's point-light ``intensity`` is radiant intensity (W/sr), vlref's
-``color × intensity``; Mitsuba's ``hg`` with ``g > 0`` scatters forward, as vlref's does; the medium is a ``cube``
-with a ``null`` BSDF and a ``homogeneous`` interior over ``medium.bounds``, ``albedo = σs/σt``; the light leg's
-extinction is always on (vlref's ``techniques.physical.light_extinction``, the default). Objects are opaque and
-black (a ``diffuse`` BSDF of reflectance 0), so Mitsuba's radiance along a view ray is vlref's ``inscatter``.
+``color × intensity``; Mitsuba's ``hg`` with ``g > 0`` scatters forward, the same physics as vlref's
+``cos θ = dot(d, l)`` convention (its vectors point the other way, so its formula has the opposite sign on its own
+cosine); the medium is a ``cube`` with a ``null`` BSDF and a ``homogeneous`` interior over ``medium.bounds``,
+``albedo = σs/σt``; the light leg's extinction is always on (vlref's ``techniques.physical.light_extinction``, the
+default). Objects are opaque and black (a ``diffuse`` BSDF of reflectance 0), so Mitsuba's radiance along a view
+ray is vlref's ``inscatter``.
 
 Only what both renderers define the same way is converted: point lights (inverse-square law, a range far beyond
 the medium), a bounded homogeneous medium without height fog or noise, spheres and unrotated boxes. Anything else
