@@ -83,8 +83,8 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   scalar loop would. The vectorised loops read only scalars and the scratch: a record's array read inside
   a lane loop costs reference-counting calls, which keep the loop scalar.
 * A PCF lookup without a transparent layer (:func:`_shadow_stage`; spot, cube and cascaded maps alike) runs as
-  four loops: map coordinates (per kind of map, with selects for the cube face and the cascade, not table
-  lookups), weights and texel offsets (vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
+  three loops: map coordinates, weights and texel offsets (per kind of map, with selects for the cube face and
+  the cascade, not table lookups or branches; vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
   four depth reads for every lane (no branch: a read skipped for lanes that scatter nothing made the loop
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
   under the condition; LLVM keeps the reads scalar on AVX-512 too, its cost model for Zen 4 and Sapphire
@@ -152,9 +152,9 @@ R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
 R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
 R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
 R_L = 31 * LANES  # (3) L, the radiance scattered toward the eye so far
-# float64 rows of a PCF map lookup (as map_lit computes them): the sample's map coordinates (u, v) and depth,
-# whether the map covers it (in front of a spot light, on a cube face, inside a cascade), the four texel weights,
-# the lit fraction; the uint64 rows of ``taps``: the face's (cascade's) first texel, then the four texel offsets
+# float64 rows of a PCF map lookup (as map_lit computes them): the sample's map coordinates (u, v; cascades only)
+# and depth, whether the map covers it (in front of a spot light, on a cube face, inside a cascade), the four texel
+# weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
 QROWS = 9
 Q_U, Q_V, Q_DREF, Q_ON_MAP, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
 T_FACE, T_00, T_10, T_01, T_11 = range(0, 5 * LANES, LANES)
@@ -191,6 +191,21 @@ def scatters_light(ss, er, eg, eb):
     """The sample scatters light of this light: ``σs > 0`` and ``E_l ≠ 0`` (no shadow lookup elsewhere)."""
     zero = cast(ss, 0.0)
     return ss > zero and er + eg + eb > zero
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def set_texels(q, taps, m, u, v, res, first):
+    """Lane ``m``'s four PCF texels around ``(u, v)`` on a ``res``² face whose first texel is ``first``
+    (:func:`~vlref.lights.shadowmaps.pcf_taps`: offsets clamped to the face) and their weights."""
+    (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
+    set_lane(q, Q_W00, m, w00)
+    set_lane(q, Q_W10, m, w10)
+    set_lane(q, Q_W01, m, w01)
+    set_lane(q, Q_W11, m, w11)
+    set_lane(taps, T_00, m, first + np.uint64(k00))
+    set_lane(taps, T_10, m, first + np.uint64(k10))
+    set_lane(taps, T_01, m, first + np.uint64(k01))
+    set_lane(taps, T_11, m, first + np.uint64(k11))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -358,9 +373,9 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _spot_texels(s, q, taps, n, lf, k):
-    """Where the samples fall in spot light ``k``'s map: ``(u, v)``, depth, in front of the light
-    (:func:`~vlref.lights.shadowmaps.spot_map_coords`)."""
+def _spot_texels(s, q, taps, n, lf, k, res):
+    """Where the samples fall in spot light ``k``'s map of ``res``² texels: depth, in front of the light
+    (:func:`~vlref.lights.shadowmaps.spot_map_coords`), the texels around ``(u, v)``."""
     prefer_wide_vectors()
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
     rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
@@ -371,28 +386,24 @@ def _spot_texels(s, q, taps, n, lf, k):
         x, y, z = lane3(s, R_POS, m)
         u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
                                              dx, dy, dz, tan_half)
-        set_lane(q, Q_U, m, u)
-        set_lane(q, Q_V, m, v)
         set_lane(q, Q_DREF, m, d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if ahead else 0.0)
-        set_lane(taps, T_FACE, m, np.uint64(0))
+        set_texels(q, taps, m, u, v, res, np.uint64(0))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _cube_texels(s, q, taps, n, lf, k, res):
-    """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis,
-    ``(u, v)`` on it, the radial distance (:func:`~vlref.lights.shadowmaps.cube_map_coords`)."""
+    """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis, the
+    radial distance (:func:`~vlref.lights.shadowmaps.cube_map_coords`), the texels around ``(u, v)`` on the face."""
     prefer_wide_vectors()
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
     face_texels = np.uint64(res * res)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         face, u, v, d_ref, on_face = cube_map_coords(float(x) - px, float(y) - py, float(z) - pz)
-        set_lane(q, Q_U, m, u)
-        set_lane(q, Q_V, m, v)
         set_lane(q, Q_DREF, m, d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if on_face else 0.0)
-        set_lane(taps, T_FACE, m, np.uint64(face) * face_texels)
+        set_texels(q, taps, m, u, v, res, np.uint64(face) * face_texels)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -400,7 +411,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
     """Where the samples fall in directional light ``k``'s cascades: the first cascade whose bounding sphere
     contains the sample, ``(u, v)`` and the depth in it (:func:`~vlref.lights.shadowmaps.cascade_map_coords`);
     outside every sphere the map covers nothing (lit). The cascades are visited last to first, each a
-    vectorised lane loop that overwrites the lanes it contains."""
+    vectorised lane loop that overwrites the lanes it contains; then the texels around ``(u, v)``."""
     prefer_wide_vectors()
     rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
@@ -428,14 +439,16 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
             set_lane(q, Q_DREF, m, d_ref if inside else d0)
             set_lane(q, Q_ON_MAP, m, 1.0 if inside else on0)
             set_lane(taps, T_FACE, m, first if inside else first0)
+    for m in range(n):
+        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, lane(taps, T_FACE, m))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
-    scatters light, 1 elsewhere. A PCF map without a transparent layer: where the samples fall in the map
-    (:func:`_spot_texels`, :func:`_cube_texels`, :func:`_cascade_texels`), the four texels and their weights,
-    the four depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
+    scatters light, 1 elsewhere. A PCF map without a transparent layer: where the samples fall in the map, its
+    four texels and their weights (:func:`_spot_texels`, :func:`_cube_texels`, :func:`_cascade_texels`), the four
+    depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
     :func:`~vlref.lights.shadowmaps.map_lit` or a shadow ray, lane by lane."""
     prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
@@ -447,22 +460,11 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     if mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
         res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
         if kind == KIND_SPOT:
-            _spot_texels(s, q, taps, n, lf, k)
+            _spot_texels(s, q, taps, n, lf, k, res)
         elif kind == KIND_DIRECTIONAL:
             _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
         else:
             _cube_texels(s, q, taps, n, lf, k, res)
-        for m in range(n):  # the four texels (clamped to the face) and their weights
-            (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(lane(q, Q_U, m), lane(q, Q_V, m), res)
-            first = lane(taps, T_FACE, m)
-            set_lane(q, Q_W00, m, w00)
-            set_lane(q, Q_W10, m, w10)
-            set_lane(q, Q_W01, m, w01)
-            set_lane(q, Q_W11, m, w11)
-            set_lane(taps, T_00, m, first + np.uint64(k00))
-            set_lane(taps, T_10, m, first + np.uint64(k10))
-            set_lane(taps, T_01, m, first + np.uint64(k01))
-            set_lane(taps, T_11, m, first + np.uint64(k11))
         # the lit fraction: every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that
         # scatter nothing or that the map does not cover keep V = 1 in the loop after
         for m in range(n):
