@@ -117,7 +117,8 @@ class MitsubaRays:
 
 
 def time_mitsuba(rays: MitsubaRays, spp_list: list[int], converged: np.ndarray) -> list[dict]:
-    rays.radiance(min(SPP_PER_PASS, spp_list[0]), seed=999)  # compiles Dr.Jit's kernels
+    for size in sorted({min(SPP_PER_PASS, spp) for spp in spp_list}):  # compiles Dr.Jit's kernels, per pass size
+        rays.radiance(size, seed=999)
     out = []
     for i, spp in enumerate(spp_list):
         start = time.perf_counter()
