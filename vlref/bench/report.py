@@ -42,6 +42,8 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
                 ("target is at 16 threads on 16 cores; " if top != "16" else "") + _ceiling_note(r, top)),
         _target(f"{one['width']}x{one['height']} x {one['steps']} steps x 1 shadowed spot ({cores} threads)",
                 one["seconds"], 0.25, "s", note="target is on 16 cores"),
+        _target(f"{one['width']}x{one['height']} x {one['steps']} steps x 4 shadowed lights ({cores} threads)",
+                r["march"]["four_lights"]["seconds"], 0.8, "s", note="target is on 16 cores"),
         _target("preview re-render {}x{}, {} steps, half res, incl. post passes".format(*cfg.preview),
                 r["post"]["preview"]["seconds"], 0.150, "s", note="target is on 2 cores"),
         _target("first render, fresh process, warm cache", r["first_render"]["warm"]["process_s"], 3.0, "s"),
