@@ -42,6 +42,9 @@ def test_every_section_with_finite_positive_figures(report):
             assert value > 0, path
     assert {"one_spot", "four_lights"} <= set(report["march"])
     assert report["march"]["four_lights"]["samples"] > report["march"]["one_spot"]["samples"] > 0
+    for name in ("one_spot", "four_lights"):  # float32 marches the same (pixel, light) pairs
+        assert report["march"][name + "_float32"]["precision"] == "float32"
+        assert report["march"][name + "_float32"]["samples"] == report["march"][name]["samples"]
     assert "1" in report["scaling"]["threads"]
     assert isinstance(report["machine"]["llvm_cpu"], str) and report["machine"]["llvm_cpu"]
     ceiling = report["scaling"]["machine_ceiling"]
@@ -51,7 +54,7 @@ def test_every_section_with_finite_positive_figures(report):
     assert report["memory"]["subprocess_maxrss_bytes"] > report["memory"]["tracemalloc_peak_bytes"] > 0
     whole = report["whole_render"]
     assert whole["seconds"] > whole["split"]["write"] > 0 and whole["split"]["volumetrics"] > 0
-    assert len(report["targets"]) == 12 and all(isinstance(t["met"], bool) for t in report["targets"])
+    assert len(report["targets"]) == 13 and all(isinstance(t["met"], bool) for t in report["targets"])
 
 
 def test_the_machine_ceiling_kernels_compute_their_chains():

@@ -10,7 +10,8 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
 from vlref.lights.shadow_cast import build_shadow_maps, cascade_splits
-from vlref.lights.shadow_lookup import shadow_visibility
+from vlref.lights.shadow_lookup import cube_map_coords, shadow_visibility
+from vlref.lights.shadow_pack import CUBE_FACES
 from vlref.scene.model import (CameraSettings, Light, Material, Plane, Scene, ShadowSettings, Sphere)
 
 SPHERES = (((0.0, 1.5, 3.0), 0.6), ((2.5, 0.0, 0.0), 0.5), ((-2.0, 0.3, -1.0), 0.5), ((0.0, -2.2, 0.4), 0.6),
@@ -138,3 +139,24 @@ def test_face_rays_are_the_texel_grid_construction(ortho):
     face = _face(origin, fwd, right, up, scale, near, limit)
     got = np.array([_face_ray(face, ortho, res, k) for k in range(res * res)])
     assert np.array_equal(got, np.column_stack([o, d, start, tmax]))
+
+
+def test_cube_map_coords_are_the_face_table_lookup():
+    """The selects of cube_map_coords give the face of the major axis (ties: x, then y, then z) and the very
+    (u, v) of the face table's axes (CUBE_FACES: sc = w · right / ma, tc = w · up / ma), bit for bit, on random
+    points, points on the axes and on the diagonals where the major axis ties; no face for w = 0."""
+    rng = np.random.default_rng(3)
+    pts = np.concatenate([rng.normal(size=(4000, 3)), np.eye(3), -np.eye(3), [[1, 1, 0], [-1, 0, -1], [0, 2, -2],
+                          [1, -1, 1], [-3, 3, 3], [0.5, 0.0, -0.0], [-0.0, 0.0, 0.25]]])
+    table = np.array([[r, u, f] for _, r, u, f in CUBE_FACES], dtype=np.float64)
+    for w in pts:
+        x, y, z = (float(c) for c in w)
+        face, u, v, d_ref, on_face = cube_map_coords(x, y, z)
+        a = np.abs(w)
+        want = int(np.argmax(a)) * 2 + int(w[int(np.argmax(a))] < 0)  # argmax takes the first of tied axes
+        assert face == want and on_face and d_ref == math.sqrt(x * x + y * y + z * z)
+        right, up, fwd = table[face]
+        ma = abs(w[0] * fwd[0] + w[1] * fwd[1] + w[2] * fwd[2])
+        assert u == 0.5 + 0.5 * ((w[0] * right[0] + w[1] * right[1] + w[2] * right[2]) / ma)
+        assert v == 0.5 - 0.5 * ((w[0] * up[0] + w[1] * up[1] + w[2] * up[2]) / ma)
+    assert cube_map_coords(0.0, 0.0, 0.0)[4] is False

@@ -5,12 +5,13 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
 ``machine``       CPU model, the CPU LLVM compiles for (``llvm_cpu``: its tuning sets the vector width) and whether
                   ``NUMBA_CPU_FEATURES`` overrides its features, cores, Numba threads, Python/NumPy/Numba
                   versions, date, command.
-``march``         the physical march kernel (:func:`vlref.techniques.physical.render`, float64) on the
+``march``         the physical march kernel (:func:`vlref.techniques.physical.render`) on the
                   benchmark scene (:func:`bench_scene`): (a) ``one_spot`` -- one spot light with a PCF
                   shadow map, HG ``g = 0.5``, extinction on the view ray and on the light leg, height fog;
                   (b) ``four_lights`` -- two spot lights, a point light and a directional light, each with
                   PCF shadows. **Samples** are (pixel, light) pairs whose ray segment inside the light's
-                  volume is not empty, times the step count: the work the kernel does.
+                  volume is not empty, times the step count: the work the kernel does. Both again with
+                  ``render.precision = "float32"`` (``one_spot_float32``, ``four_lights_float32``).
 ``baseline``      the same computation as (a) in vectorised NumPy (:mod:`vlref.bench.baseline`), its
                   samples/s, its largest relative difference to the kernel, and the kernel/NumPy ratios;
                   and :func:`plain_march` (one ``exp``, one ``pow``, one hard shadow lookup per sample, on

@@ -4,6 +4,7 @@ scene, its thread scaling, and the vectorised NumPy (:mod:`.baseline`) and plain
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numba
@@ -61,10 +62,14 @@ def _time_march(scene: Scene, repeats: int) -> dict:
 
 
 def bench_march(cfg: BenchConfig) -> dict:
+    """Scenes (a) ``one_spot`` and (b) ``four_lights`` in float64, then both in float32 (``render.precision``;
+    keys ``one_spot_float32``, ``four_lights_float32``)."""
     out = {}
-    for name, lights in (("one_spot", "one"), ("four_lights", "four")):
-        scene = bench_scene(cfg.width, cfg.height, cfg.steps, lights, cfg.shadow_resolution)
-        out[name] = _time_march(scene, cfg.repeats)
+    for precision, suffix in (("float64", ""), ("float32", "_float32")):
+        for name, lights in (("one_spot", "one"), ("four_lights", "four")):
+            scene = bench_scene(cfg.width, cfg.height, cfg.steps, lights, cfg.shadow_resolution)
+            scene = dataclasses.replace(scene, render=dataclasses.replace(scene.render, precision=precision))
+            out[name + suffix] = {"precision": precision, **_time_march(scene, cfg.repeats)}
     return out
 
 

@@ -43,6 +43,8 @@ def targets(cfg: BenchConfig, r: dict) -> list[dict]:
                 ("target is at 16 threads on 16 cores; " if top != "16" else "") + _ceiling_note(r, top)),
         _target(f"{one['width']}x{one['height']} x {one['steps']} steps x 1 shadowed spot ({cores} threads)",
                 one["seconds"], 0.25, "s", note="target is on 16 cores"),
+        _target(f"{one['width']}x{one['height']} x {one['steps']} steps x 4 shadowed lights ({cores} threads)",
+                r["march"]["four_lights"]["seconds"], 0.8, "s", note="target is on 16 cores"),
         _target("preview re-render {}x{}, {} steps, half res, incl. post passes".format(*cfg.preview),
                 r["post"]["preview"]["seconds"], 0.150, "s", note="target is on 2 cores"),
         _target("first render, fresh process, warm cache", r["first_render"]["warm"]["process_s"], 3.0, "s"),
@@ -125,7 +127,7 @@ def format_report(r: dict) -> str:
              f"machine: {m['cpu_model']} (LLVM: {m['llvm_cpu']}), {m['cores_available']} cores, "
              f"{m['numba_threads']} Numba threads; numpy {m['numpy']}, numba {m['numba']}, python {m['python']}", ""]
     for name, s in r["march"].items():
-        lines.append(f"march {name:12s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "
+        lines.append(f"march {name:19s} {s['width']}x{s['height']}x{s['steps']}: {s['seconds']:.3f} s, "
                      f"{s['samples_per_s'] / 1e6:.2f} M samples/s ({s['samples_per_s_per_thread'] / 1e6:.2f} per thread)")
     b = r["baseline"]
     lines.append(f"numpy baseline {b['width']}x{b['height']}: {b['samples_per_s'] / 1e6:.3f} M samples/s; kernel/numpy "

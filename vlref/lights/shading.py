@@ -14,7 +14,7 @@ and the distance to the light (``inf`` for a directional light).
 ``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with ``V_l = 1 − strength·(1 − tr)``,
 ``tr`` an exact RGB shadow ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed
 ``SURFACE_OFFSET`` along the normal) and ``strength`` the light's ``shadows.strength``
-(:func:`vlref.lights.shadowmaps.apply_strength`: the ``V`` of docs/PHYSICS.md "The integral", which the march
+(:func:`vlref.lights.shadow_lookup.apply_strength`: the ``V`` of docs/PHYSICS.md "The integral", which the march
 applies in the medium, and a GPU port's lighting pass on its surfaces; a light without shadows, absent or
 disabled, shadows surfaces fully: strength 1); the medium does not attenuate surface lighting here (the
 volumetric pass applies the view transmittance). Pixels that hit nothing get ``render.sky_color``.

@@ -21,11 +21,11 @@ from numba import njit
 from ..geometry import shadow_transmittance
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ,
                    KIND_DIRECTIONAL, KIND_SPOT)
-from .shadow_pack import (CUBE_AXES, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES, S_STRENGTH, SHADOW_EXACT,
+from .shadow_pack import (S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES, S_STRENGTH, SHADOW_EXACT,
                           SHADOW_NONE, SHADOW_PCF)
 
-__all__ = ["shadow_visibility", "map_lit", "exact_visibility", "apply_strength", "spot_map_coords", "sample_map",
-           "pcf_taps", "pcf_blend"]
+__all__ = ["shadow_visibility", "map_lit", "exact_visibility", "apply_strength", "spot_map_coords", "cube_map_coords",
+           "cascade_map_coords", "sample_map", "pcf_taps", "pcf_blend"]
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -84,14 +84,45 @@ def sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref):
             w00 * a[2] + w10 * b[2] + w01 * c[2] + w11 * d[2])
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
-def _cube_face(wx, wy, wz):
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def cube_map_coords(wx, wy, wz):
+    """``(face, u, v, d_ref, on_face)`` of the point at ``w = x - p`` from a point light (float64): the face of
+    ``w``'s major axis (ties: x before y before z; ``CUBE_FACES`` order), the coordinates on it,
+    ``u = 1/2 + sc/(2 ma)``, ``v = 1/2 - tc/(2 ma)`` with ``sc``, ``tc``, ``ma`` the components of ``w`` along the
+    face's right, up and forward axes (``ma = |w · forward|``), the radial distance the map stores, and whether
+    the point has a face (``ma > 0``; else ``u = v = 0.5``).
+
+    The axes are unit vectors of ±x, ±y, ±z, so each component is ``±wx``, ``±wy`` or ``±wz``, chosen here by
+    selects (the face table's products with 0 and ±1 give the same values, up to the sign of a zero that
+    ``1/2 ± 0`` drops): no table lookup, so the march evaluates it in a vectorised lane loop."""
     ax, ay, az = abs(wx), abs(wy), abs(wz)
-    if ax >= ay and ax >= az:
-        return 0 if wx >= 0 else 1
-    if ay >= az:
-        return 2 if wy >= 0 else 3
-    return 4 if wz >= 0 else 5
+    x_major = ax >= ay and ax >= az
+    y_major = not x_major and ay >= az
+    if x_major:
+        face, ma, sc, tc = (0, ax, -wz, wy) if wx >= 0 else (1, ax, wz, wy)
+    elif y_major:
+        face, ma, sc, tc = (2, ay, wx, -wz) if wy >= 0 else (3, ay, wx, wz)
+    else:
+        face, ma, sc, tc = (4, az, wx, wy) if wz >= 0 else (5, az, -wx, wy)
+    on_face = ma != 0.0
+    ma = ma if on_face else 1.0
+    u = 0.5 + 0.5 * (sc / ma) if on_face else 0.5
+    v = 0.5 - 0.5 * (tc / ma) if on_face else 0.5
+    return face, u, v, math.sqrt(wx * wx + wy * wy + wz * wz), on_face
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def cascade_map_coords(cx, cy, cz, radius, back, rx, ry, rz, ux, uy, uz, dx, dy, dz):
+    """``(u, v, d_ref, inside)`` of the point at ``c = x - centre`` in a directional light's cascade (float64) of
+    bounding-sphere ``radius`` and ray plane ``back`` behind the centre, with the light's right ``r``, up ``u`` and
+    forward ``d`` axes: ``u = 1/2 + (c · r)/(2 radius)``, ``v = 1/2 - (c · u)/(2 radius)``, the distance from the
+    ray plane ``c · d + back`` the map stores, and whether the sphere contains the point. Scalars only: the march
+    evaluates it in a vectorised lane loop, one cascade at a time."""
+    inside = cx * cx + cy * cy + cz * cz <= radius * radius
+    xl = cx * rx + cy * ry + cz * rz
+    yl = cx * ux + cy * uy + cz * uz
+    zl = cx * dx + cy * dy + cz * dz
+    return 0.5 + 0.5 * xl / radius, 0.5 - 0.5 * yl / radius, zl + back, inside
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
@@ -124,17 +155,15 @@ def map_lit(shadows, kind, lf, light, x, y, z):
     if kind == KIND_DIRECTIONAL:
         for k in range(sm_i[light, S_CASCADES]):
             j = S_CASC + 5 * k
-            cx, cy, cz = x - sm_f[light, j], y - sm_f[light, j + 1], z - sm_f[light, j + 2]
-            radius = sm_f[light, j + 3]
-            if cx * cx + cy * cy + cz * cz <= radius * radius:
-                xl = cx * lf[light, F_RX] + cy * lf[light, F_RY] + cz * lf[light, F_RZ]
-                yl = cx * lf[light, F_UX] + cy * lf[light, F_UY] + cz * lf[light, F_UZ]
-                zl = cx * lf[light, F_DX] + cy * lf[light, F_DY] + cz * lf[light, F_DZ]
-                u = 0.5 + 0.5 * xl / radius
-                v = 0.5 - 0.5 * yl / radius
+            u, v, d_ref, inside = cascade_map_coords(
+                x - sm_f[light, j], y - sm_f[light, j + 1], z - sm_f[light, j + 2], sm_f[light, j + 3],
+                sm_f[light, j + 4], float(lf[light, F_RX]), float(lf[light, F_RY]), float(lf[light, F_RZ]),
+                float(lf[light, F_UX]), float(lf[light, F_UY]), float(lf[light, F_UZ]), float(lf[light, F_DX]),
+                float(lf[light, F_DY]), float(lf[light, F_DZ]))
+            if inside:
                 o = base + k * res * res
                 to = tbase + k * res * res if tbase >= 0 else -1
-                return sample_map(data, tint, o, to, res, pcf, u, v, zl + sm_f[light, j + 4])
+                return sample_map(data, tint, o, to, res, pcf, u, v, d_ref)
         return 1.0, 1.0, 1.0
     if kind == KIND_SPOT:
         u, v, d_ref, ahead = spot_map_coords(wx, wy, wz, float(lf[light, F_RX]), float(lf[light, F_RY]),
@@ -144,18 +173,12 @@ def map_lit(shadows, kind, lf, light, x, y, z):
         if not ahead:
             return 1.0, 1.0, 1.0
         return sample_map(data, tint, base, tbase, res, pcf, u, v, d_ref)
-    d_ref = math.sqrt(wx * wx + wy * wy + wz * wz)
-    f = _cube_face(wx, wy, wz)
-    rx, ry, rz = CUBE_AXES[f, 0, 0], CUBE_AXES[f, 0, 1], CUBE_AXES[f, 0, 2]
-    ux, uy, uz = CUBE_AXES[f, 1, 0], CUBE_AXES[f, 1, 1], CUBE_AXES[f, 1, 2]
-    ma = abs(wx * CUBE_AXES[f, 2, 0] + wy * CUBE_AXES[f, 2, 1] + wz * CUBE_AXES[f, 2, 2])
-    if ma == 0.0:
+    f, u, v, d_ref, on_face = cube_map_coords(wx, wy, wz)
+    if not on_face:
         return 1.0, 1.0, 1.0
-    sc = (wx * rx + wy * ry + wz * rz) / ma
-    tc = (wx * ux + wy * uy + wz * uz) / ma
     o = base + f * res * res
     to = tbase + f * res * res if tbase >= 0 else -1
-    return sample_map(data, tint, o, to, res, pcf, 0.5 + 0.5 * sc, 0.5 - 0.5 * tc, d_ref)
+    return sample_map(data, tint, o, to, res, pcf, u, v, d_ref)
 
 
 @njit(cache=True, fastmath=False)

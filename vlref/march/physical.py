@@ -82,8 +82,9 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   keep the loop scalar). Without fast-math LLVM may not reorder arithmetic, and each lane computes what a
   scalar loop would. The vectorised loops read only scalars and the scratch: a record's array read inside
   a lane loop costs reference-counting calls, which keep the loop scalar.
-* The spot light's PCF lookup without a transparent layer (:func:`_shadow_stage`) runs as three loops: map
-  coordinates, weights and texel offsets (vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
+* A PCF lookup without a transparent layer (:func:`_shadow_stage`; spot, cube and cascaded maps alike) runs as
+  three loops: map coordinates, weights and texel offsets (per kind of map, with selects for the cube face and
+  the cascade, not table lookups or branches; vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
   four depth reads for every lane (no branch: a read skipped for lanes that scatter nothing made the loop
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
   under the condition; LLVM keeps the reads scalar on AVX-512 too, its cost model for Zen 4 and Sapphire
@@ -109,8 +110,10 @@ from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_D
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
 from ..lights.shading import cookie_rgb, light_vector
-from ..lights.shadow_lookup import apply_strength, exact_visibility, map_lit, pcf_blend, pcf_taps, spot_map_coords
-from ..lights.shadow_pack import SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_MODE, S_OFFSET, S_RES, S_STRENGTH
+from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map_coords, exact_visibility, map_lit,
+                                    pcf_blend, pcf_taps, spot_map_coords)
+from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
+                                  S_STRENGTH)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
@@ -150,12 +153,12 @@ R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
 R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
 R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
 R_L = 31 * LANES  # (3) L, the radiance scattered toward the eye so far
-# float64 rows of a spot light's PCF lookup (as map_lit computes them): the sample's map depth, in front of
-# the light, the four texel weights, the lit fraction; the uint64 rows T_00..T_11 of ``taps`` hold the four
-# texel offsets
-QROWS = 7
-Q_DREF, Q_AHEAD, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
-T_00, T_10, T_01, T_11 = range(0, 4 * LANES, LANES)
+# float64 rows of a PCF map lookup (as map_lit computes them): the sample's map coordinates (u, v; cascades only)
+# and depth, whether the map covers it (in front of a spot light, on a cube face, inside a cascade), the four texel
+# weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
+QROWS = 9
+Q_U, Q_V, Q_DREF, Q_ON_MAP, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
+T_FACE, T_00, T_10, T_01, T_11 = range(0, 5 * LANES, LANES)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
@@ -189,6 +192,21 @@ def scatters_light(ss, er, eg, eb):
     """The sample scatters light of this light: ``σs > 0`` and ``E_l ≠ 0`` (no shadow lookup elsewhere)."""
     zero = cast(ss, 0.0)
     return ss > zero and er + eg + eb > zero
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def set_texels(q, taps, m, u, v, res, first):
+    """Lane ``m``'s four PCF texels around ``(u, v)`` on a ``res``² face whose first texel is ``first``
+    (:func:`~vlref.lights.shadow_lookup.pcf_taps`: offsets clamped to the face) and their weights."""
+    (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
+    set_lane(q, Q_W00, m, w00)
+    set_lane(q, Q_W10, m, w10)
+    set_lane(q, Q_W01, m, w01)
+    set_lane(q, Q_W11, m, w11)
+    set_lane(taps, T_00, m, first + np.uint64(k00))
+    set_lane(taps, T_10, m, first + np.uint64(k10))
+    set_lane(taps, T_01, m, first + np.uint64(k01))
+    set_lane(taps, T_11, m, first + np.uint64(k11))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -356,10 +374,82 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
+def _spot_texels(s, q, taps, n, lf, k, res):
+    """Where the samples fall in spot light ``k``'s map of ``res``² texels: depth, in front of the light
+    (:func:`~vlref.lights.shadow_lookup.spot_map_coords`), the texels around ``(u, v)``."""
+    prefer_wide_vectors()
+    px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
+    rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
+    ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
+    dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
+    tan_half = float(lf[k, F_TAN_HALF])
+    for m in range(n):
+        x, y, z = lane3(s, R_POS, m)
+        u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
+                                             dx, dy, dz, tan_half)
+        set_lane(q, Q_DREF, m, d_ref)
+        set_lane(q, Q_ON_MAP, m, 1.0 if ahead else 0.0)
+        set_texels(q, taps, m, u, v, res, np.uint64(0))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _cube_texels(s, q, taps, n, lf, k, res):
+    """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis, the
+    radial distance (:func:`~vlref.lights.shadow_lookup.cube_map_coords`), the texels around ``(u, v)`` on the face."""
+    prefer_wide_vectors()
+    px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
+    face_texels = np.uint64(res * res)
+    for m in range(n):
+        x, y, z = lane3(s, R_POS, m)
+        face, u, v, d_ref, on_face = cube_map_coords(float(x) - px, float(y) - py, float(z) - pz)
+        set_lane(q, Q_DREF, m, d_ref)
+        set_lane(q, Q_ON_MAP, m, 1.0 if on_face else 0.0)
+        set_texels(q, taps, m, u, v, res, np.uint64(face) * face_texels)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
+    """Where the samples fall in directional light ``k``'s cascades: the first cascade whose bounding sphere
+    contains the sample, ``(u, v)`` and the depth in it (:func:`~vlref.lights.shadow_lookup.cascade_map_coords`);
+    outside every sphere the map covers nothing (lit). The cascades are visited last to first, each a
+    vectorised lane loop that overwrites the lanes it contains; then the texels around ``(u, v)``."""
+    prefer_wide_vectors()
+    rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
+    ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
+    dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
+    res = sm_i[k, S_RES]
+    for m in range(n):
+        set_lane(q, Q_U, m, 0.5)
+        set_lane(q, Q_V, m, 0.5)
+        set_lane(q, Q_DREF, m, 0.0)
+        set_lane(q, Q_ON_MAP, m, 0.0)
+        set_lane(taps, T_FACE, m, np.uint64(0))
+    for c in range(sm_i[k, S_CASCADES] - 1, -1, -1):
+        j = S_CASC + 5 * c
+        cx, cy, cz, radius, back = sm_f[k, j], sm_f[k, j + 1], sm_f[k, j + 2], sm_f[k, j + 3], sm_f[k, j + 4]
+        first = np.uint64(c * res * res)
+        for m in range(n):
+            x, y, z = lane3(s, R_POS, m)
+            u, v, d_ref, inside = cascade_map_coords(float(x) - cx, float(y) - cy, float(z) - cz, radius, back,
+                                                     rx, ry, rz, ux, uy, uz, dx, dy, dz)
+            # the lane's values so far, read before any store (a read under the condition keeps the loop scalar)
+            u0, v0, d0, on0, first0 = (lane(q, Q_U, m), lane(q, Q_V, m), lane(q, Q_DREF, m), lane(q, Q_ON_MAP, m),
+                                       lane(taps, T_FACE, m))
+            set_lane(q, Q_U, m, u if inside else u0)
+            set_lane(q, Q_V, m, v if inside else v0)
+            set_lane(q, Q_DREF, m, d_ref if inside else d0)
+            set_lane(q, Q_ON_MAP, m, 1.0 if inside else on0)
+            set_lane(taps, T_FACE, m, first if inside else first0)
+    for m in range(n):
+        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, lane(taps, T_FACE, m))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
-    scatters light, 1 elsewhere. A spot light's PCF map without a transparent layer: map coordinates, the
-    four depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
+    scatters light, 1 elsewhere. A PCF map without a transparent layer: where the samples fall in the map, its
+    four texels and their weights (:func:`_spot_texels`, :func:`_cube_texels`, :func:`_cascade_texels`), the four
+    depth reads, then ``V`` (module docstring, "Performance"); every other lookup is
     :func:`~vlref.lights.shadow_lookup.map_lit` or a shadow ray, lane by lane."""
     prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
@@ -368,30 +458,16 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     zero, one = zero_one(s)
     lf = lights.floats
     sm_i, data = shadows.ints, shadows.data
-    if kind == KIND_SPOT and mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
-        px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
-        rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
-        ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
-        dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
-        tan_half = float(lf[k, F_TAN_HALF])
+    if mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
         res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
-        for m in range(n):  # the sample in the map: coordinates, depth, the four texels and their weights
-            x, y, z = lane3(s, R_POS, m)
-            u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
-                                                 dx, dy, dz, tan_half)
-            (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
-            set_lane(q, Q_DREF, m, d_ref)
-            set_lane(q, Q_AHEAD, m, 1.0 if ahead else 0.0)
-            set_lane(q, Q_W00, m, w00)
-            set_lane(q, Q_W10, m, w10)
-            set_lane(q, Q_W01, m, w01)
-            set_lane(q, Q_W11, m, w11)
-            set_lane(taps, T_00, m, np.uint64(k00))
-            set_lane(taps, T_10, m, np.uint64(k10))
-            set_lane(taps, T_01, m, np.uint64(k01))
-            set_lane(taps, T_11, m, np.uint64(k11))
+        if kind == KIND_SPOT:
+            _spot_texels(s, q, taps, n, lf, k, res)
+        elif kind == KIND_DIRECTIONAL:
+            _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
+        else:
+            _cube_texels(s, q, taps, n, lf, k, res)
         # the lit fraction: every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that
-        # scatter nothing keep V = 1 in the loop after
+        # scatter nothing or that the map does not cover keep V = 1 in the loop after
         for m in range(n):
             set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
                                             lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m),
@@ -400,7 +476,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             lit = lane(q, Q_LIT, m)
             fr, _, _ = apply_strength(strength, lit, lit, lit)
             er, eg, eb = lane3(s, R_E_RGB, m)
-            used = lane(q, Q_AHEAD, m) != 0.0 and scatters_light(lane(s, R_SIGMA_S, m), er, eg, eb)
+            used = lane(q, Q_ON_MAP, m) != 0.0 and scatters_light(lane(s, R_SIGMA_S, m), er, eg, eb)
             v = cast(one, fr) if used else one
             set_lane3(s, R_VIS, m, v, v, v)
         return
@@ -480,7 +556,7 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
     h, w = t_end.shape
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
-    taps = np.empty(4 * LANES, dtype=np.uint64)
+    taps = np.empty(5 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
