@@ -545,28 +545,30 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows, geo,
-                 per_light, transmittance):
-    """Take tasks, tiles of ``TILE_W x TILE_H`` pixels in row-major order of tiles (:func:`vlref.parallel.take`
-    on ``taken``), until none is left; per task, its pixels' transmittance, then per light its pairs with a
-    non-empty segment in packets of up to ``LANES``, set up by :func:`_setup` (module docstring)."""
+def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows,
+                 geo, per_light, transmittance):
+    """Take tasks, tiles of ``TILE_W x TILE_H`` pixels of the rows ``rows = (first, end)`` in row-major order of
+    tiles (:func:`vlref.parallel.take` on ``taken``), until none is left; per task, its pixels' transmittance,
+    then per light its pairs with a non-empty segment in packets of up to ``LANES``, set up by :func:`_setup`
+    (module docstring)."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
-    h, w = t_end.shape
+    first, end = rows
+    w = t_end.shape[1]
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
     taps = np.empty(5 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
-    tiles = tiles_x * ((h + TILE_H - 1) // TILE_H)
+    tiles = tiles_x * ((end - first + TILE_H - 1) // TILE_H)
     while True:
         task = take(taken)
         if task >= tiles:
             return
-        i0, j0 = (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
-        i1, j1 = min(h, i0 + TILE_H), min(w, j0 + TILE_W)
+        i0, j0 = first + (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
+        i1, j1 = min(end, i0 + TILE_H), min(w, j0 + TILE_W)
         for i in range(i0, i1):  # the pixel's transmittance, Beer–Lambert from the eye to t_end
             for j in range(j0, j1):
                 transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
@@ -601,8 +603,9 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
 
 @njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                   per_light, transmittance):
-    """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
+                   per_light, transmittance, rows):
+    """Fill the rows ``rows = (first, end)`` (int64, ``first <= end <= H``) of ``per_light`` (n_lights, H, W, 3)
+    and ``transmittance`` (H, W) (module docstring); the other rows are left as they are.
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
@@ -610,6 +613,10 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").
+
+    A caller that marches a frame in bands of rows (:mod:`vlref.progress`) passes the whole arrays and each
+    band's ``rows``: the band is written in place, with no buffer of its own to allocate and copy (four lights at
+    1080p: 200 MB; BENCHMARKS.md "The march: bands in place").
 
     The pixels are split in tasks, tiles of ``TILE_W x TILE_H`` pixels. The threads of a ``prange`` over
     :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
@@ -625,4 +632,4 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     for _ in prange(WORKERS):
         o, d, te, off, med, lts, shd, gg, out, tr = borrowed((origin, dirs, t_end, offsets, medium, lights, shadows,
                                                               geo, per_light, transmittance))
-        _march_tasks(taken, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)
+        _march_tasks(taken, rows, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)
