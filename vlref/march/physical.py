@@ -87,8 +87,8 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   the cascade, not table lookups or branches; vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
   four depth reads for every lane (no branch: a read skipped for lanes that scatter nothing made the loop
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
-  under the condition; LLVM keeps the reads scalar on AVX-512 too, its cost model for Zen 4 and Sapphire
-  Rapids emits no gathers), then ``V`` (vectorised).
+  under the condition; with the arrays declared apart, :func:`_lit_fraction`, hardware gathers on AVX-512),
+  then ``V`` (vectorised).
 * Height fog: in a noiseless fog the fog exponent is linear in the step index, so the density is
   ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
   ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
@@ -118,7 +118,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
-from ..numeric import cast, exp, expm1, prefer_wide_vectors, zero_one
+from ..numeric import arrays_do_not_overlap, cast, exp, expm1, prefer_wide_vectors, zero_one
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
@@ -445,6 +445,21 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
+def _lit_fraction(q, taps, n, data, ubase):
+    """The PCF lit fraction of every lane (:func:`~vlref.lights.shadow_lookup.pcf_blend` of its taps, always inside
+    the map: :func:`~vlref.lights.shadow_lookup.pcf_taps` clamps them) from the maps' ``data`` at ``ubase``. No
+    branch, and the arrays are declared apart (:func:`vlref.numeric.arrays_do_not_overlap`): LLVM then reads the
+    four depths of eight lanes with one hardware gather each (AVX-512; without the promise a store to ``q`` might
+    change a later lane's read, and the loop stayed scalar)."""
+    prefer_wide_vectors()
+    arrays_do_not_overlap()
+    for m in range(n):
+        set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
+                                        lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m), lane(q, Q_W01, m),
+                                        lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
     scatters light, 1 elsewhere. A PCF map without a transparent layer: where the samples fall in the map, its
@@ -466,12 +481,8 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
         else:
             _cube_texels(s, q, taps, n, lf, k, res)
-        # the lit fraction: every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that
-        # scatter nothing or that the map does not cover keep V = 1 in the loop after
-        for m in range(n):
-            set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
-                                            lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m),
-                                            lane(q, Q_W01, m), lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+        # the lit fraction; lanes that scatter nothing or that the map does not cover keep V = 1 in the loop after
+        _lit_fraction(q, taps, n, data, ubase)
         for m in range(n):  # V, the light's strength applied
             lit = lane(q, Q_LIT, m)
             fr, _, _ = apply_strength(strength, lit, lit, lit)
