@@ -1,7 +1,7 @@
 """SHA-256 of the physical march's buffers, to show that a change of the march keeps the bits (BENCHMARKS.md, "The
-march: ...").
+march: bands in place, whole tiles, gathered depth reads").
 
-Every bundled scene and the bench scene (b) (four PCF-shadowed lights), at 48x27x16, each in the variants
+Every bundled scene (16) and the bench scene (b) (four PCF-shadowed lights), at 48x27x16, each in the variants
 {pcf, hard maps} x {float64, float32} x {light leg on, off}: :func:`vlref.techniques.physical.march_buffers`'s
 ``per_light`` and ``transmittance``, one digest each.
 

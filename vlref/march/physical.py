@@ -627,7 +627,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
 
     A caller that marches a frame in bands of rows (:mod:`vlref.progress`) passes the whole arrays and each
     band's ``rows``: the band is written in place, with no buffer of its own to allocate and copy (four lights at
-    1080p: 200 MB; BENCHMARKS.md "The march: bands in place").
+    1080p: 200 MB; BENCHMARKS.md "The march: bands in place, whole tiles, gathered depth reads").
 
     The pixels are split in tasks, tiles of ``TILE_W x TILE_H`` pixels. The threads of a ``prange`` over
     :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
