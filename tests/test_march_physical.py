@@ -316,6 +316,18 @@ def test_exact_shadows_need_the_geometry():
                        (np.int64(0), np.int64(3)))
 
 
+def test_the_march_refuses_rows_outside_the_image():
+    scene = _scene([Light(type="point", position=(0.0, 0.0, 3.0))], w=4, h=3)
+    table = _no_shadows(1)
+    per, trans = np.zeros((1, 3, 4, 3)), np.empty((3, 4))
+    cam = camera_from_settings(scene.camera, 4, 3)
+    for first, end in ((0, 4), (2, 1), (-1, 2)):  # past the last row, backwards, before the first row
+        with pytest.raises(ValueError, match="rows must satisfy"):
+            march_physical(cam.position, cam.ray_directions(), np.full((3, 4), 50.0), np.full((3, 4), 0.5), 4,
+                           pack_medium(scene), pack_lights(scene), table.table, None, True, 2, per, trans,
+                           (np.int64(first), np.int64(end)))
+
+
 @pytest.mark.parametrize("precision", ["float64", "float32"])
 def test_a_pixel_does_not_depend_on_its_packet(precision):
     """The march runs packets of rays through vectorised lane loops (and a scalar remainder loop) in tiles of

@@ -639,6 +639,8 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
         for k in range(shadows.ints.shape[0]):
             if shadows.ints[k, S_MODE] == SHADOW_EXACT:
                 raise ValueError("march_physical: a light has exact shadows, and geo is None")
+    if not 0 <= rows[0] <= rows[1] <= t_end.shape[0]:
+        raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
         o, d, te, off, med, lts, shd, gg, out, tr = borrowed((origin, dirs, t_end, offsets, medium, lights, shadows,
