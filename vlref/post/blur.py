@@ -27,7 +27,8 @@ import math
 import numpy as np
 from numba import get_num_threads, njit, prange
 
-from vlref.numeric import arrays_do_not_overlap
+from vlref.numeric import arrays_do_not_overlap, glibc_exp, prefer_wide_vectors
+from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
@@ -54,24 +55,39 @@ def depth_delta_at(a, b):
     return 0.0 if a == b else abs(a - b)
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def _gaussian_weight(dz, factor):
+    """``exp(-(dz*factor)^2)`` with libm's bits (:func:`~vlref.numeric.glibc_exp`: 1 at 0, 0 below ``-745.13``, no
+    call, so a loop of them vectorises)."""
+    s = dz * factor
+    return glibc_exp(-(s * s))
+
+
 @njit(cache=True, fastmath=False)
 def _depth_weight(dz, code, factor, epsilon):
-    """``exp(-(dz*factor)^2)`` (``_GAUSSIAN``), 1 (``_UNIT``) or ``1/(dz + epsilon)`` (``_INVERSE``).
-
-    The Gaussian skips ``exp`` where its value is known exactly: 1 at argument 0, 0 below -746
-    (``exp`` underflows to 0 below ``-1075 ln 2 = -745.13``), so the bits are ``exp``'s.
-    """
+    """``exp(-(dz*factor)^2)`` (``_GAUSSIAN``, :func:`_gaussian_weight`), 1 (``_UNIT``) or ``1/(dz + epsilon)``
+    (``_INVERSE``)."""
     if code == _GAUSSIAN:
-        s = dz * factor
-        q = s * s
-        if q == 0.0:
-            return 1.0
-        if q > 746.0:
-            return 0.0
-        return math.exp(-q)
+        return _gaussian_weight(dz, factor)
     if code == _UNIT:
         return 1.0
     return 1.0 / (dz + epsilon)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _depth_weights(tap, at, code, factor, epsilon, out):
+    """``out[c] = W(dz(tap[c], at[c]))`` (:func:`_depth_weight`, :func:`depth_delta_at`) for every ``c``: one loop
+    per weight kind, which LLVM vectorises (NumPy's error model: ``epsilon > 0`` keeps the division finite)."""
+    prefer_wide_vectors()
+    if code == _GAUSSIAN:
+        for c in range(out.size):
+            out[c] = _gaussian_weight(depth_delta_at(tap[c], at[c]), factor)
+    elif code == _UNIT:
+        for c in range(out.size):
+            out[c] = 1.0
+    else:
+        for c in range(out.size):
+            out[c] = 1.0 / (depth_delta_at(tap[c], at[c]) + epsilon)
 
 
 def _weight_code(kind: str, factor: float, epsilon: float) -> int:
@@ -126,14 +142,19 @@ def _blur_lines(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor, epsi
 def _pair_tables(z, r, axis, code, factor, epsilon, E, centre):
     """The depth weights of line ``r`` (a row of ``z``) against its neighbours along ``axis``:
     ``E[m - 1, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
-    ``centre[c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``)."""
+    ``centre[c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``); vectorised
+    (:func:`_depth_weights`), the horizontal neighbours clamped to the last column one by one."""
     H, W = z.shape
+    zr = z[r]
     for m in range(1, E.shape[0] + 1):
-        for c in range(W):
-            tap = z[r, min(c + m, W - 1)] if axis == 1 else z[min(r + m, H - 1), c]
-            E[m - 1, c] = _depth_weight(depth_delta_at(tap, z[r, c]), code, factor, epsilon)
-    for c in range(W):
-        centre[c] = _depth_weight(depth_delta_at(z[r, c], z[r, c]), code, factor, epsilon)
+        if axis == 1:
+            inside = max(W - m, 0)
+            _depth_weights(zr[m:], zr[:inside], code, factor, epsilon, E[m - 1, :inside])
+            for c in range(inside, W):
+                E[m - 1, c] = _depth_weight(depth_delta_at(zr[W - 1], zr[c]), code, factor, epsilon)
+        else:
+            _depth_weights(z[min(r + m, H - 1)], zr, code, factor, epsilon, E[m - 1])
+    _depth_weights(zr, zr, code, factor, epsilon, centre)
 
 
 @njit(cache=True, fastmath=False)
@@ -243,12 +264,14 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     (:func:`_add_tap`). ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
     depth tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
     kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
-    work). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
+    work). The blocks get the arrays without reference counts (:func:`~vlref.parallel.borrowed`: each row passes
+    them to several functions). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
     """
     H = v.shape[0]
     n_items = max(1, min(H, blocks))
     for b in prange(n_items):
-        _bilateral_block(v, z, axis, g, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, out)
+        vb, zb, gb, ob = borrowed((v, z, g, out))
+        _bilateral_block(vb, zb, axis, gb, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, ob)
 
 
 def _line_buffers(v):
