@@ -143,7 +143,8 @@ def _pair_tables(z, r, axis, code, factor, epsilon, E, centre):
     """The depth weights of line ``r`` (a row of ``z``) against its neighbours along ``axis``:
     ``E[m - 1, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
     ``centre[c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``); vectorised
-    (:func:`_depth_weights`), the horizontal neighbours clamped to the last column one by one."""
+    (:func:`_depth_weights`), the horizontal neighbours clamped to the last column one by one; the centre's from
+    the two values ``dz(z, z)`` can take."""
     H, W = z.shape
     zr = z[r]
     for m in range(1, E.shape[0] + 1):
@@ -154,7 +155,9 @@ def _pair_tables(z, r, axis, code, factor, epsilon, E, centre):
                 E[m - 1, c] = _depth_weight(depth_delta_at(zr[W - 1], zr[c]), code, factor, epsilon)
         else:
             _depth_weights(z[min(r + m, H - 1)], zr, code, factor, epsilon, E[m - 1])
-    _depth_weights(zr, zr, code, factor, epsilon, centre)
+    same, nan = _depth_weight(0.0, code, factor, epsilon), _depth_weight(np.nan, code, factor, epsilon)
+    for c in range(W):
+        centre[c] = same if zr[c] == zr[c] else nan  # dz(z, z): 0, or NaN for a NaN depth
 
 
 @njit(cache=True, fastmath=False)
