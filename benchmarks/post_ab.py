@@ -8,7 +8,8 @@ with ``time``, alternating the trees:
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-LABEL python3 benchmarks/post_ab.py warm LABEL
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-LABEL python3 benchmarks/post_ab.py time LABEL
 
-``--only NAME`` runs one pass (the warm phase of each pass can run in parallel processes). Medians of ``--repeats`` (default 3) after a warm-up call. The one-thread figure is CPU time under
+``--only NAME`` runs one pass (the warm phase of each pass can run in parallel processes). Medians of
+``--repeats`` (default 3) after a warm-up call. The one-thread figure is CPU time under
 ``numba.set_num_threads(1)``, in nanoseconds per pixel and tap. One JSON line per run on stdout.
 """
 

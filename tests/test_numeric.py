@@ -203,4 +203,4 @@ def test_glibc_exp_has_libms_bits_where_the_reduction_rounds_a_tie():
 def test_glibc_exp_any_argument(x):
     got, ref = glibc_exp(x), _libm_exp(x)
     assert got == ref or (math.isnan(got) and math.isnan(ref))
-    assert math.copysign(1.0, got) == math.copysign(1.0, ref)
+    assert math.isnan(ref) or math.copysign(1.0, got) == math.copysign(1.0, ref)  # a NaN's sign: not kept by LLVM

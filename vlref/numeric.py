@@ -1,5 +1,6 @@
 """Numeric helpers shared by the kernels: the float-type helpers :func:`cast` and :func:`zero_one`, and
-:func:`exp` / :func:`expm1` written out so that LLVM can vectorise the loops that call them.
+:func:`exp` / :func:`expm1` written out so that LLVM can vectorise the loops that call them, and :func:`glibc_exp`,
+libm's ``exp`` bit for bit (glibc's algorithm, written out the same way; its docstring).
 
 ``exp`` and ``expm1`` (float64 arithmetic; a float32 argument gives the float32 rounding of the float64 value):
 the argument is reduced as ``x = n ln2 + r``, ``n = round(x / ln2)``, ``|r| <= ln2/2``, with ``ln2`` split in
@@ -180,7 +181,8 @@ def _glibc_exp_table() -> np.ndarray:
     """glibc's ``__exp_data.tab`` (``EXP_TABLE_BITS = 7``), from its definition: for ``k = 0..127``,
     ``2^(k/128) ~= H_k (1 + T_k)`` with ``H_k`` the float64 nearest ``2^(k/128)`` and ``T_k`` the float64 nearest
     ``2^(k/128) / H_k - 1``; entry ``2k`` holds the bits of ``T_k``, entry ``2k + 1`` those of ``H_k`` less ``k << 45``
-    (so that adding ``ki << 45`` to it builds ``2^(ki/128)``'s exponent). 60 significant digits: both roundings exact."""
+    (so that adding ``ki << 45`` to it builds ``2^(ki/128)``'s exponent). Computed with 60 significant digits; the
+    result equals the table that glibc's ``exp_data.c`` lists."""
     with decimal.localcontext() as context:
         context.prec = 60
         table = np.empty(256, np.int64)
@@ -204,19 +206,21 @@ _TWO_1009, _TWO_M1022 = 2.0 ** 1009, 2.0 ** -1022
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def glibc_exp(x):
     """``e^x`` of a float64 with the bits of glibc's ``exp`` (glibc >= 2.28 on x86-64 CPUs with FMA: its
-    ``__exp_fma``, the ``exp`` that ``math.exp``, NumPy's scalar loops and Numba's ``math.exp`` call there),
+    ``__exp_fma``, the ``exp`` that ``math.exp`` and Numba's ``math.exp`` call there),
     written so that LLVM can vectorise a loop that calls it (a table read, selects, no branch, no call).
 
     The algorithm (Szabolcs Nagy's, ARM optimized-routines; glibc's ``sysdeps/ieee754/dbl-64/e_exp.c``, musl's
     ``exp.c``): ``x = k ln2/128 + r``, ``k = round(128 x / ln2)`` by the ``1.5·2^52`` shifter, ``|r| <= ln2/256``;
     ``2^(k/128) = 2^(k>>7) H (1 + T)`` from :func:`_glibc_exp_table`; ``e^x ~= s + s (T + r + r² (C2 + C3 r) +
     r⁴ (C4 + C5 r))``, ``s = 2^(k/128)``, error < 0.51 ulp (the source's bound). Each operation as GCC compiles the
-    source for FMA hardware (``a·b + c`` fused wherever the C has it, :func:`fma`); the arguments that source sends
+    source for FMA hardware (``a·b + c`` fused, :func:`fma`, where the product has no other use; the special case's
+    ``scale * tmp``, used twice, is rounded on its own); the arguments that source sends
     to its special cases (``|x| >= 512``: the result's exponent scaled in two steps, results below ``2^-1022``
     rounded once more against double rounding; ``|x| < 2^-54``: ``1 + x``; ``|x| >= 1024``, inf, NaN) take the same
     arithmetic here as selects. Checked bit for bit against ``math.exp`` in tests/test_numeric.py (over the whole
-    float64 range and at the branch edges); on a libm with another algorithm (macOS, musl without FMA, glibc's
-    non-FMA build) the bits of both may differ by an ulp, not this function's from one machine to another.
+    float64 range, at the branch edges and where the reduction's ``k`` meets a tie). On a libm with another
+    algorithm or build (macOS, glibc without FMA hardware) ``math.exp`` may differ from it by an ulp; its own bits
+    are the same on every machine. A NaN comes back as a NaN whose sign LLVM does not keep.
     """
     bits = np.float64(x).view(np.int64)
     abstop = (bits >> 52) & 0x7FF
