@@ -1,6 +1,7 @@
 """Post-pass A/B of two trees on one machine (BENCHMARKS.md, "Post passes"): every pass of ``vlref bench``'s post
 section (``vlref.bench.stages.bench_post``: the same inputs, the preview left out) at 1080p on every core, the radial
-blur (64 taps) at 960x540 on one core, and a hash of each output (the trees must agree bit for bit).
+blur (64 taps) and the bilateral blur H+V at 960x540 on one core, and a hash of each output (the trees must agree
+bit for bit).
 
 Run from a tree's root, once with ``warm`` (compiles into the tree's ``NUMBA_CACHE_DIR`` on a small image), then
 with ``time``, alternating the trees:
@@ -9,8 +10,9 @@ with ``time``, alternating the trees:
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-LABEL python3 benchmarks/post_ab.py time LABEL
 
 ``--only NAME`` runs one pass (the warm phase of each pass can run in parallel processes). Medians of
-``--repeats`` (default 3) after a warm-up call. The one-thread figure is CPU time under
-``numba.set_num_threads(1)``, in nanoseconds per pixel and tap. One JSON line per run on stdout.
+``--repeats`` (default 3) after a warm-up call. The one-thread figures are CPU time under
+``numba.set_num_threads(1)``: the radial blur's in nanoseconds per pixel and tap, the bilateral blur's per pixel and
+pass. One JSON line per run on stdout.
 """
 
 import argparse
@@ -78,10 +80,12 @@ def main() -> None:
         if args.phase == "time":
             report["ms"][name] = round(1e3 * median_seconds(fn, args.repeats), 2)
     if args.phase == "time":
-        small = passes(540, 960)["radial_blur_64"]
+        small = passes(540, 960)
         numba.set_num_threads(1)
-        one = median_seconds(small, args.repeats, time.process_time)
+        one = median_seconds(small["radial_blur_64"], args.repeats, time.process_time)
         report["radial_one_thread_ns_per_tap"] = round(one / (540 * 960 * 65) * 1e9, 3)
+        one = median_seconds(small["bilateral_blur_hv"], args.repeats, time.process_time)
+        report["bilateral_one_thread_ns_per_pixel_pass"] = round(one / (540 * 960 * 2) * 1e9, 2)
     print(json.dumps(report))
 
 
