@@ -38,15 +38,18 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
 
 
 def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0,
-                png_meta: Mapping[str, str] | None = None, half: Sequence[str] = ()) -> list[Path]:
+                png_meta: Mapping[str, str] | None = None, half: Sequence[str] = (), preview: bool = True) -> list[Path]:
     """Write a :class:`vlref.render.RenderResult`: the ``main`` buffers (all with ``stages``) as EXR
-    with the result's metadata (those in ``half`` as half floats), plus the ``final.png`` preview at
+    with the result's metadata (those in ``half`` as half floats), plus (``preview``) the ``final.png`` preview at
     ``exposure`` (``png_meta``: its tEXt). The preview is encoded on a second thread while the EXR files are
     written (zlib and OpenEXR release the GIL; the EXR files on a thread each as well measured no faster on the
     device: BENCHMARKS.md, "The frame around the kernels")."""
     names = list(result.buffers) if stages else [n for n in main if n in result.buffers]
+    buffers = {n: result.buffers[n] for n in names}
+    if not preview:
+        return save_buffers(out_dir, buffers, result.metadata, half)
     with concurrent.futures.ThreadPoolExecutor(1) as pool:
         png = pool.submit(write_png, Path(out_dir) / "final.png", result.buffers["final"], exposure, png_meta)
-        paths = save_buffers(out_dir, {n: result.buffers[n] for n in names}, result.metadata, half)
+        paths = save_buffers(out_dir, buffers, result.metadata, half)
         paths.append(png.result())
     return paths
