@@ -9,6 +9,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..processes import host_cores
 from .exr import channel_dict, write_exr
 from .png import write_png
 
@@ -24,17 +25,20 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
 
     Every buffer is validated (name, shape, dtype) before the first file is written, and each file is
     written atomically; wrap the call in :func:`vlref.io.output_folders.output_dir` for an all-or-nothing set.
-    The buffers named in ``half`` are stored as half floats (:func:`vlref.io.exr.write_exr`).
+    The buffers named in ``half`` are stored as half floats (:func:`vlref.io.exr.write_exr`). The float32
+    channels of all buffers are made on a thread per buffer (NumPy's casts release the GIL), then the files are
+    written one after another (each compressed on OpenEXR's thread pool).
     """
     out_dir = Path(out_dir)
-    prepared = []
     for name, array in buffers.items():
         if not _SAFE_NAME.match(name):
             raise ValueError(f"buffer name {name!r} is not a safe file name")
         if name in half and np.asarray(array).dtype.kind != "f":
             raise ValueError(f"buffer {name!r}: integer buffers stay float32 (half asked)")
-        prepared.append((out_dir / f"{name}.exr", channel_dict(array, None), name in half))
-    return [write_exr(path, data, metadata=metadata, half=h) for path, data, h in prepared]
+    with concurrent.futures.ThreadPoolExecutor(max(1, min(len(buffers), host_cores()))) as pool:
+        channels = list(pool.map(lambda array: channel_dict(array, None), buffers.values()))
+    return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
+            for name, data in zip(buffers, channels)]
 
 
 def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0,
