@@ -1,5 +1,5 @@
 // Pass 3: the lit scene colour (deferred): albedo (sum E max(0, n.l) V / pi + ambient); sky colour. V: one
-// texel of the light's map (spot, point) or of its cascade (directional).
+// texel of the light's map (spot, point) or of its cascade (directional), looked up offset along the normal.
 @group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var shadow_tex: texture_depth_2d_array;
@@ -35,7 +35,7 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
             if (sun) {
                 v = cascade_visibility(li, x, select(n, vec3f(0.0), BUG_NO_NORMAL_OFFSET));
             } else {
-                v = shadow_visibility(li, x);
+                v = shadow_visibility(li, x + local_normal_offset(li, x, n, cos_n));
             }
             s += inc.e * cos_n * v;
         }
