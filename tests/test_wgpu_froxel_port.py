@@ -191,8 +191,8 @@ def test_sun_lights_the_port_scene_colour(verdicts, sequences):
 def test_raster_bug_passes_its_own_buffers_and_fails_against_the_scene_by_frame_and_pass(device, verdicts, variant):
     """A raster bug feeds vlref's march the same wrong inputs, so on the port's own buffers it passes every frame;
     only the sequence verdict against the scene catches it, naming the frames (``from_frame`` on: a stale camera
-    shows once the camera has moved since frame 0, a wrong sun term from frame 0) and the passes (``fails``) where
-    it fails, each by at least 2x a bound. The sun's bugs (its n.l taken with the direction of travel; its
+    shows once the camera has moved since frame 0, a wrong sun term from frame 0) and the passes (``fails``, the
+    first by at least 2x a bound) where it fails. The sun's bugs (its n.l taken with the direction of travel; its
     cascades looked up without the normal offset, so sunlit ground shadows itself) darken ground that is no
     shadow silhouette of either map: outside the shading zone, where the mean error is bounded."""
     spec = VARIANTS[variant]
@@ -206,5 +206,5 @@ def test_raster_bug_passes_its_own_buffers_and_fails_against_the_scene_by_frame_
     assert {i for i, _ in failures} == set(range(spec.from_frame, FRAMES)), verdict.table()
     for i in range(spec.from_frame, FRAMES):
         failed = {p.name: max(p.metrics["margins"].values()) for j, p in failures if j == i}
-        assert all(failed.get(name, 0.0) >= 2.0 for name in spec.fails), (i, failed)
+        assert set(spec.fails) <= set(failed) and failed[spec.fails[0]] >= 2.0, (i, failed)
     assert f"- frame {spec.from_frame}, {spec.fails[0]} (against the scene)" in verdict.table()
