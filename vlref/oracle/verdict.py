@@ -105,6 +105,11 @@ ROUNDING_SAFETY = 2.0
 """A pixel may differ from vlref by this many times vlref's depth-rounding spread (on top of the preset's threshold):
 the four sign patterns are four of the 2^n ways n taps can round; a port's one way moves a pixel by at most
 ROUNDING_SAFETY x their largest change (measured in docs/PORTING.md, "Edge zone")."""
+ROUNDING_PRESETS = 1e-3
+"""The depth-rounding spread (:func:`rounding_spread`, eight renders) is taken for passes whose preset's ``rel_tol`` is
+under this (float32's bounds): its largest measured value, ~20x float32's threshold (2e-3 relative, the WebGPU
+port's frames), is under a quarter of the fp16 presets' thresholds (``rel_tol`` >= 1e-2 with the edge tolerance of
+``gpu-half``; ``gpu-full``'s 5e-3 plus its 1e-3 floor), so it would add nothing to their zones."""
 KNIFE_ZONE = 1.0
 """A pixel is knife-sensitive (in the rounding zone) when the knife-edge nudges move vlref's value by more than this
 share of the preset's threshold: the nudges' continuous change is a fifth of float32's threshold at the median pixel
@@ -454,8 +459,9 @@ def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray
 
 
 def rounding_patterns(depth: np.ndarray) -> list[np.ndarray]:
-    """Four (H, W) patterns of signs ±1 keyed by the stored depth value: bit ``b`` of the rank of the pixel's depth
-    among the frame's distinct depths, modulo 16. A port decodes each stored value by one formula, so pixels of one
+    """Eight (H, W) patterns of signs ±1 keyed by the stored depth value: bit ``b`` of the rank of the pixel's depth
+    among the frame's distinct depths, modulo 16, and the four negated (a min-depth downsample picks another texel
+    only when the nearer of two depths moves away and the other closer, one direction of the pair's swap). A port decodes each stored value by one formula, so pixels of one
     stored depth round alike (a level camera sees a ground plane's rows at one depth each: the bilateral taps along
     such a row are equally deep in any decode, and moving them apart would invent the spread of a 1 mm guard at
     every ground pixel); two distinct depths less than 16 apart in rank differ in one of the bits, so some pattern
@@ -463,7 +469,8 @@ def rounding_patterns(depth: np.ndarray) -> list[np.ndarray]:
     z = np.asarray(depth, dtype=np.float64)
     _, rank = np.unique(np.where(np.isfinite(z), z, np.inf), return_inverse=True)
     code = rank.reshape(z.shape) % 16
-    return [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
+    signs = [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
+    return signs + [-s for s in signs]
 
 
 def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
@@ -522,11 +529,10 @@ def _rounding_allowance(tol, own: dict, rounding: dict, knife_spread: dict, buff
     for name, d in rounding.items():
         if d.shape[:2] == shape:
             depth |= _sensitive(tol, _as_3d(own[name]), d, ROUNDING_ZONE)
-    zone = dilate(depth, ROUNDING_REACH)
-    widen = ROUNDING_SAFETY * rounding[buffer]
-    if buffer in knife_spread and knife_spread[buffer].shape == ref.shape:
-        zone |= _sensitive(tol, ref, knife_spread[buffer], KNIFE_ZONE)
-        widen = np.maximum(widen, knife_spread[buffer])
+    zone = dilate(depth, ROUNDING_REACH) | _sensitive(tol, ref, knife_spread[buffer], KNIFE_ZONE)
+    widen = knife_spread[buffer]
+    if buffer in rounding and rounding[buffer].shape == ref.shape:
+        widen = np.maximum(widen, ROUNDING_SAFETY * rounding[buffer])
     return zone, widen
 
 
@@ -557,8 +563,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
-    knife, rounding = memo["knife"], memo["rounding"]
+    knife = memo["knife"]
     knife_spread = _knife_spread(knife)
     out = []
     for k, p in enumerate(port.passes):
@@ -578,7 +583,10 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
-        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
+        if tol.rel_tol < ROUNDING_PRESETS and "rounding" not in memo:
+            memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+        rounding = memo.get("rounding", {})
+        if fits and p.buffer in knife_spread and knife_spread[p.buffer].shape == ref.shape:
             rounding_zone, widen = _rounding_allowance(tol, own, rounding, knife_spread, p.buffer)
             zone = zone | rounding_zone
             ref = _within(ref, p.image, widen)
