@@ -219,7 +219,7 @@ def test_edge_zone_geometry():
 def test_gpu_presets_allow_no_failing_pixel_outside_the_edge_zone():
     """All but gpu-sampled: what a port reads through its sampler (3-D grids, no geometric zone yet) keeps a
     bounded share (tests/test_compare.py). gpu-float32's zone is not geometric (no edge_pixels): the knife-edge
-    and depth-rounding pixels of the port's own buffers, with twice float32's per-pixel tolerance."""
+    and depth-rounding pixels of the port's own buffers, with five times float32's per-pixel tolerance."""
     for name, tol in load_presets().items():
         if name.startswith(("gpu-", "raster-")) or name == "end-to-end":
             if name == "gpu-sampled":
@@ -228,7 +228,7 @@ def test_gpu_presets_allow_no_failing_pixel_outside_the_edge_zone():
             assert tol.max_fail_fraction == 0 and (tol.edge_pixels >= 1 or name == "gpu-float32"), name
     f32, g32, full = (load_presets()[n] for n in ("float32", "gpu-float32", "gpu-full"))
     assert (g32.rel_tol, g32.abs_tol, g32.max_mean_abs) == (f32.rel_tol, f32.abs_tol, f32.max_mean_abs)
-    assert (g32.edge_rel, g32.edge_abs) == (2 * f32.rel_tol, 2 * f32.abs_tol)
+    assert (g32.edge_rel, g32.edge_abs) == (5 * f32.rel_tol, 5 * f32.abs_tol)
     assert g32.edge_rel < full.edge_rel and g32.edge_abs < full.edge_abs
 
 
