@@ -282,13 +282,14 @@ def test_gpu_float32_gives_each_pixel_vlrefs_own_rounding_spread_and_no_more(tmp
 
 def test_rounding_patterns_move_equal_stored_depths_alike_and_close_ones_apart():
     """The depth-rounding patterns are a function of the stored depth (a port decodes a value one way), and any two
-    distinct depths less than 16 apart in rank move in opposite directions in some pattern."""
+    distinct depths less than 16 apart in rank move in opposite directions in some pattern, each way round."""
     rng = np.random.default_rng(3)
     depth = rng.choice(np.linspace(5.0, 6.0, 40), size=(30, 50))
     depth[0, :5] = np.inf
     patterns = rounding_patterns(depth)
-    assert len(patterns) == 4 and all(set(np.unique(p)) <= {-1.0, 1.0} for p in patterns)
-    code = sum((p > 0).astype(int) << b for b, p in enumerate(patterns))
+    assert len(patterns) == 8 and all(set(np.unique(p)) <= {-1.0, 1.0} for p in patterns)
+    assert all(np.array_equal(patterns[b + 4], -patterns[b]) for b in range(4))   # each pair moved both ways
+    code = sum((p > 0).astype(int) << b for b, p in enumerate(patterns[:4]))
     values = np.unique(depth)
     by_value = [code[depth == v] for v in values]
     assert all(np.all(c == c[0]) for c in by_value)                  # equal depths, equal moves

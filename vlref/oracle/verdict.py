@@ -99,17 +99,19 @@ ROUNDING_ZONE = 0.25
 of the preset's per-pixel threshold (:func:`_rounding_allowance`)."""
 ROUNDING_REACH = 1
 """The rounding zone takes the depth-sensitive pixels of every buffer of a size, grown by this many pixels: a pixel
-next to a sensitive one shares most of its taps, whose signs the four patterns of :func:`rounding_patterns` may set
+next to a sensitive one shares most of its taps, whose signs the eight patterns of :func:`rounding_patterns` may set
 so that their changes cancel where a port's roundings do not."""
 ROUNDING_SAFETY = 2.0
 """A pixel may differ from vlref by this many times vlref's depth-rounding spread (on top of the preset's threshold):
-the four sign patterns are four of the 2^n ways n taps can round; a port's one way moves a pixel by at most
-ROUNDING_SAFETY x their largest change (measured in docs/PORTING.md, "Edge zone")."""
+the eight sign patterns are eight of the 2^n ways n taps can round; a port's one way moves a pixel by at most
+ROUNDING_SAFETY x their largest change (measured: docs/PORTING.md, "The float32 rounding allowance")."""
 ROUNDING_PRESETS = 1e-3
 """The depth-rounding spread (:func:`rounding_spread`, eight renders) is taken for passes whose preset's ``rel_tol`` is
 under this (float32's bounds): its largest measured value, ~20x float32's threshold (2e-3 relative, the WebGPU
-port's frames), is under a quarter of the fp16 presets' thresholds (``rel_tol`` >= 1e-2 with the edge tolerance of
-``gpu-half``; ``gpu-full``'s 5e-3 plus its 1e-3 floor), so it would add nothing to their zones."""
+port's frames), is under the fp16 presets' per-pixel thresholds (``gpu-half`` 1e-2 relative, ``gpu-full`` 5e-3 plus
+a floor of 1e-3 of the mean level), whose fp16 stores dominate there. Nor is it taken for a
+depth buffer (``depth_*``: the camera depth min-downsampled), which the rounding moves by itself, 4 ulp: 5e-3 of
+float32's threshold."""
 KNIFE_ZONE = 1.0
 """A pixel is knife-sensitive (in the rounding zone) when the knife-edge nudges move vlref's value by more than this
 share of the preset's threshold: the nudges' continuous change is a fifth of float32's threshold at the median pixel
@@ -461,11 +463,11 @@ def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray
 def rounding_patterns(depth: np.ndarray) -> list[np.ndarray]:
     """Eight (H, W) patterns of signs ±1 keyed by the stored depth value: bit ``b`` of the rank of the pixel's depth
     among the frame's distinct depths, modulo 16, and the four negated (a min-depth downsample picks another texel
-    only when the nearer of two depths moves away and the other closer, one direction of the pair's swap). A port decodes each stored value by one formula, so pixels of one
-    stored depth round alike (a level camera sees a ground plane's rows at one depth each: the bilateral taps along
-    such a row are equally deep in any decode, and moving them apart would invent the spread of a 1 mm guard at
-    every ground pixel); two distinct depths less than 16 apart in rank differ in one of the bits, so some pattern
-    moves them in opposite directions."""
+    only when the nearer of two depths moves away and the other closer: one direction of the pair). A port decodes
+    each stored value by one formula, so pixels of one stored depth round alike (a level camera sees a ground plane's
+    rows at one depth each: the bilateral taps along such a row are equally deep in any decode, and moving them
+    apart would invent the spread of a 1 mm guard at every ground pixel); two distinct depths less than 16 apart in
+    rank differ in one of the bits, so some pattern moves them in opposite directions, each way round."""
     z = np.asarray(depth, dtype=np.float64)
     _, rank = np.unique(np.where(np.isfinite(z), z, np.inf), return_inverse=True)
     code = rank.reshape(z.shape) % 16
@@ -583,9 +585,11 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
-        if tol.rel_tol < ROUNDING_PRESETS and "rounding" not in memo:
-            memo["rounding"] = rounding_spread(port, frame_p, technique, own)
-        rounding = memo.get("rounding", {})
+        rounding = {}
+        if tol.rel_tol < ROUNDING_PRESETS and not p.buffer.startswith("depth"):
+            if "rounding" not in memo:
+                memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+            rounding = memo["rounding"]
         if fits and p.buffer in knife_spread and knife_spread[p.buffer].shape == ref.shape:
             rounding_zone, widen = _rounding_allowance(tol, own, rounding, knife_spread, p.buffer)
             zone = zone | rounding_zone
