@@ -48,7 +48,7 @@ from vlref.reference.mitsuba import mitsuba_scene
 from vlref.render import prepare_frame
 from vlref.scene.model import Bounds, Box, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings, Sphere
 
-SPP_PER_PASS = 64  # Mitsuba's samples per pixel per launch (bounds the wavefront's memory)
+SPP_PER_PASS = 1024  # Mitsuba's samples per pixel per launch (80x45: 3.7 M paths, 0.5 GB; faster than 64 or 256)
 
 
 def bench_scene(width: int, height: int) -> Scene:
