@@ -38,6 +38,7 @@ import argparse
 import json
 import os
 import platform
+import sys
 import time
 
 import numba
@@ -89,7 +90,9 @@ def run_vlref(scene: Scene, setting: tuple[float, int], converged: np.ndarray, r
         start = time.perf_counter()
         result = render_reference(scene, rel_tol=rel_tol, shadow_samples=samples)
         seconds.append(time.perf_counter() - start)
-    return {"rel_tol": rel_tol, "shadow_samples": samples, "runs_s": seconds, **errors(result.inscatter, converged)}
+    out = {"rel_tol": rel_tol, "shadow_samples": samples, "runs_s": seconds, **errors(result.inscatter, converged)}
+    print(f"(progress) vlref {rel_tol:g}/{samples}: runs {seconds}, p99 {out['p99']:.3g}", file=sys.stderr, flush=True)
+    return out
 
 
 class MitsubaRays:
@@ -139,6 +142,8 @@ def time_mitsuba(rays: MitsubaRays, spp_list: list[int], converged: np.ndarray, 
         start = time.perf_counter()
         image = rays.radiance(spp, seed=i + 1)
         out.append({"spp": spp, "seconds": time.perf_counter() - start, **errors(image, converged)})
+        print(f"(progress) mitsuba {spp} spp: {out[-1]['seconds']:.3f} s, p99 {out[-1]['p99']:.3g}", file=sys.stderr,
+              flush=True)
     return out
 
 
