@@ -5,7 +5,7 @@
     bvh.py             binned-SAH BVH build and traversal
     scene_geometry.py  build_geometry -> Geometry (the "geo" tuple), closest_hit, closest_hits (a row or
                        chunk of rays), shadow_transmittance, trace_distances
-    raycast.py         raycast -> GBuffer (depth, distance, position, normal, albedo, emission, object_id)
+    raycast.py         raycast -> GBuffer (depth, distance, normal, object_id; position, albedo, emission derived)
 """
 
 from .bvh import Bvh, build_bvh, traversal_stack

@@ -107,18 +107,25 @@ def light_incidence(lights, k, x, y, z):
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _shade(geo, lights, strength, position, normal, albedo, emission, hit, ambient, sky, out):
-    h, w = hit.shape
+def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky,
+           out):
+    """The scene colour of every pixel (module docstring) from the G-buffer's stored buffers: the surface point
+    ``o + t d`` and the object's albedo and emission computed where they are read (the bits of the G-buffer's
+    derived ``position``, ``albedo`` and ``emission``)."""
+    h, w = object_id.shape
     inv_pi = 1.0 / math.pi
+    ox, oy, oz = origin[0], origin[1], origin[2]
     for p in prange(h * w):
         i, j = p // w, p % w
-        if not hit[i, j]:
+        obj = object_id[i, j]
+        if obj < 0:
             out[i, j, 0], out[i, j, 1], out[i, j, 2] = sky[0], sky[1], sky[2]
             continue
+        t = distance[i, j]
         nx, ny, nz = normal[i, j, 0], normal[i, j, 1], normal[i, j, 2]
-        x = position[i, j, 0] + SURFACE_OFFSET * nx
-        y = position[i, j, 1] + SURFACE_OFFSET * ny
-        z = position[i, j, 2] + SURFACE_OFFSET * nz
+        x = (ox + t * dirs[i, j, 0]) + SURFACE_OFFSET * nx
+        y = (oy + t * dirs[i, j, 1]) + SURFACE_OFFSET * ny
+        z = (oz + t * dirs[i, j, 2]) + SURFACE_OFFSET * nz
         sr, sg, sb = 0.0, 0.0, 0.0
         for k in range(lights.ints.shape[0]):
             lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
@@ -132,16 +139,17 @@ def _shade(geo, lights, strength, position, normal, albedo, emission, hit, ambie
             sg += eg * cos_n * vg
             sb += eb * cos_n * vb
         for c, s in enumerate((sr, sg, sb)):
-            out[i, j, c] = albedo[i, j, c] * (s * inv_pi + ambient[c]) + emission[i, j, c]
+            out[i, j, c] = obj_albedo[obj, c] * (s * inv_pi + ambient[c]) + obj_emission[obj, c]
 
 
 def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
-    out = np.empty(gbuffer.albedo.shape)
+    out = np.empty(gbuffer.normal.shape)
     strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 1.0
                          for li in scene.lights])
-    _shade(geometry.arrays, lights, strength, gbuffer.position, gbuffer.normal, gbuffer.albedo, gbuffer.emission,
-           gbuffer.object_id >= 0, np.asarray(scene.render.ambient, dtype=np.float64),
-           np.asarray(scene.render.sky_color, dtype=np.float64), out)
+    _shade(geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
+           gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
+           np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),
+           out)
     return out
