@@ -190,7 +190,7 @@ def _closest(lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_firs
              node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
              ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack):
     """:func:`closest_hit` on the geo tuple's arrays (the fields of the same names)."""
-    best, best_k, nx, ny, nz = tmax, -1, 0.0, 0.0, 0.0
+    best, best_k, nx, ny, nz = tmax, np.int64(-1), 0.0, 0.0, 0.0  # int64, not Literal[int](-1): one prims_closest
     for j in range(lin.shape[0]):
         k = lin[j]
         if opaque_only and opacity[prim_obj[k]] < 1.0:
