@@ -18,9 +18,9 @@ import subprocess
 import sys
 
 CHILD = """
-import hashlib, json, time
+import hashlib, json
 import numpy as np
-from vlref.bench.config import bench_scene
+from vlref.bench.config import bench_scene, median_time as median
 from vlref.bench.renders import _whole
 whole = _whole(None, 1920, 1080, 64, "four", 1024)
 from vlref.camera import camera_from_settings
@@ -32,15 +32,6 @@ scene = bench_scene(1920, 1080, 64, "four", 1024)
 camera = camera_from_settings(scene.camera, 1920, 1080)
 geometry = build_geometry(scene)
 packed = pack_lights(scene)
-
-def median(fn, repeats):
-    fn()
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - start)
-    return float(np.median(times))
 
 rc = median(lambda: raycast(scene, camera, geometry), 5)
 g = raycast(scene, camera, geometry)
