@@ -38,7 +38,7 @@ from ..camera import Camera
 from ..parallel import WORKERS, borrowed, take
 from ..scene.model import Scene
 from .bvh import traversal_stack
-from .scene_geometry import Geometry, build_geometry, closest_hits
+from .scene_geometry import OPAQUE_ONLY, Geometry, build_geometry, closest_hits
 
 __all__ = ["GBuffer", "raycast"]
 
@@ -105,7 +105,7 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, 
         for x in range(w):  # the ray's end on the far plane
             cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
             tmax[x] = far / cos_f[x]
-        closest_hits(geo, origins, dirs[y], tmax, True, stack, t_row, obj_row, n_row)
+        closest_hits(geo, origins, dirs[y], tmax, OPAQUE_ONLY, stack, t_row, obj_row, n_row)
         for x in range(w):  # the surface each ray sees
             t, obj = t_row[x], obj_row[x]
             object_id[y, x] = obj
