@@ -2,11 +2,11 @@
 
     python3 benchmarks/cold_raycast_ab.py TREE_A TREE_B [ROUNDS]
 
-First, one after the other (B, then A), each tree's cold first render as ``vlref bench``'s ``first_render`` measures it (the
-tree's ``vlref.bench.renders._whole`` with a fresh ``NUMBA_CACHE_DIR``: (a) at 320x180x64, one spot, in a fresh
-process, its compile spread over processes as ``vlref render`` does). Then ``ROUNDS`` alternated rounds A, B, ...: one
-process of each tree (with the cache its cold render filled) measures ``raycast`` of (b) at 1920x1080 as ``vlref
-bench``'s ``raycast`` section does (median of 5 after a warm-up call). Prints one JSON line per measurement.
+First, one after the other (B, then A), each tree's cold first render as ``vlref bench``'s ``first_render``
+measures it (the tree's ``vlref.bench.renders._whole`` with a fresh ``NUMBA_CACHE_DIR``: (a) at 320x180x64, one spot,
+in a fresh process, its compile spread over processes as ``vlref render`` does). Then ``ROUNDS`` alternated rounds A,
+B, ...: one process of each tree (with the cache its cold render filled) measures ``raycast`` of (b) at 1920x1080 as
+``vlref bench``'s ``raycast`` section does (median of 5 after a warm-up call). Prints one JSON line per measurement.
 """
 
 import json

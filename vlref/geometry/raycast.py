@@ -21,9 +21,10 @@ reads ``o + t d`` and the object's albedo and emission: no (H, W, 3) array of th
 Performance (BENCHMARKS.md, "Ray casting: the query inlined, the arrays borrowed, rows on demand" and "The
 G-buffer's bytes"): rows are handed out to the threads on demand (:func:`vlref.parallel.take`; sky rows cost next
 to nothing, so ``prange``'s equal blocks would leave threads idle), and the workers get every array without
-reference counts (:func:`vlref.parallel.borrowed`). At 1080p on 16 cores the kernel casts ~107 M rays/s on reused
-buffers; a fresh G-buffer costs the first touch of its new pages (the OS zeroes each one), which is why only 44
-of the former 116 bytes a pixel are written.
+reference counts (:func:`vlref.parallel.borrowed`). A fresh G-buffer costs the first touch of its new pages (the OS
+zeroes each one), which is why only 44 of the former 116 bytes a pixel are written: at 1080p on 16 cores ``raycast``
+casts ~118 M rays/s, the kernel on buffers allocated once ~137 M (one device machine; another measured 74-80 M for
+``raycast``).
 """
 
 from __future__ import annotations
