@@ -8,7 +8,9 @@ processes of two trees and precisions can run side by side), then alternate the 
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-LABEL python3 benchmarks/march_ab.py warm LABEL float64
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-LABEL python3 benchmarks/march_ab.py time LABEL
 
-``time`` prints one line per figure and appends them to ``$OUT/march_ab.jsonl``.
+``time`` prints one line per figure and appends them to ``$OUT/march_ab.jsonl``. ``split LABEL`` times, for both
+scenes in float64, the parts of ``physical.render``: the march (:func:`~vlref.techniques.physical.march_buffers`), the
+sum over lights and the composite (medians of ``--repeats``), into the same file.
 """
 
 import dataclasses
@@ -18,7 +20,9 @@ import sys
 
 from vlref.bench.config import FULL, bench_scene, median_time
 from vlref.bench.march import march_samples
+from vlref.post.composite import composite_physical, sum_lights
 from vlref.render import prepare_frame
+from vlref.scene.technique_params import resolved
 from vlref.techniques import physical
 
 SCENES = (("one_spot", "one"), ("four_lights", "four"))
@@ -27,6 +31,32 @@ SCENES = (("one_spot", "one"), ("four_lights", "four"))
 def scene_for(lights: str, precision: str, width: int, height: int):
     scene = bench_scene(width, height, FULL.steps, lights, FULL.shadow_resolution)
     return dataclasses.replace(scene, render=dataclasses.replace(scene.render, precision=precision))
+
+
+def _write(row: dict) -> None:
+    with open(os.path.join(os.environ.get("OUT", "."), "march_ab.jsonl"), "a") as fh:
+        fh.write(json.dumps(row) + "\n")
+
+
+def split(label: str, repeats: int = 3) -> None:
+    for name, lights in SCENES:
+        scene = scene_for(lights, "float64", FULL.width, FULL.height)
+        frame = prepare_frame(scene)
+        maps = frame.shadow_maps()
+
+        def march():
+            return physical.march_buffers(scene, frame.camera, frame.gbuffer.distance, frame.lights, maps,
+                                          frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
+
+        per_light, trans = march()
+        inscatter = sum_lights(per_light)
+        row = {"label": label, "scene": name, "precision": "float64", "split": {
+            "render": median_time(lambda: physical.render(scene, frame), repeats),
+            "march_buffers": median_time(march, repeats),
+            "sum_lights": median_time(lambda: sum_lights(per_light), repeats),
+            "composite": median_time(lambda: composite_physical(frame.scene_colour, trans, inscatter), repeats)}}
+        print(label, name, " ".join(f"{k} {v:.4f} s" for k, v in row["split"].items()), flush=True)
+        _write(row)
 
 
 def main(phase: str, label: str, precisions: list[str], repeats: int = 3) -> None:
@@ -44,9 +74,11 @@ def main(phase: str, label: str, precisions: list[str], repeats: int = 3) -> Non
             row = {"label": label, "scene": name, "precision": precision, "seconds": seconds,
                    "samples_per_s": samples / seconds}
             print(f"{label} {name} {precision}: {seconds:.3f} s, {samples / seconds / 1e6:.1f} M samples/s", flush=True)
-            with open(os.path.join(os.environ.get("OUT", "."), "march_ab.jsonl"), "a") as fh:
-                fh.write(json.dumps(row) + "\n")
+            _write(row)
 
 
 if __name__ == "__main__":
-    main(sys.argv[1], sys.argv[2], sys.argv[3:] or ["float64", "float32"])
+    if sys.argv[1] == "split":
+        split(sys.argv[2])
+    else:
+        main(sys.argv[1], sys.argv[2], sys.argv[3:] or ["float64", "float32"])

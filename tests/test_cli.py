@@ -3,13 +3,17 @@
 import subprocess
 import sys
 
+import imageio.v3 as iio
 import numpy as np
 import pytest
 
 from vlref import __version__
 from vlref.cli import main
+from vlref.cli import render as render_cli
 from vlref.io.exr import read_exr
 from vlref.io.images import read_image
+from vlref.io.png import png_text
+from vlref.io.tonemap import srgb8
 
 SMALL = ["--set", "render.width=48", "--set", "render.height=27", "--set", "render.steps=8"]
 
@@ -46,6 +50,24 @@ def test_render_is_deterministic(tmp_path):
     a = (tmp_path / "a" / "final.exr").read_bytes()
     b = (tmp_path / "b" / "final.exr").read_bytes()
     assert a == b
+
+
+def test_render_preview_is_the_exposed_final_and_a_failed_preview_leaves_nothing(tmp_path, monkeypatch):
+    # the preview (exposure and PNG) is written on a thread beside the EXR files: its codes are srgb8 of the final
+    # buffer at the exposure its tEXt records, and when it fails the output folder is not even created
+    out = tmp_path / "out"
+    assert main(["render", "pillars", "-o", str(out), "-q", *SMALL]) == 0
+    data = (out / "final.png").read_bytes()
+    exposure = float(png_text(data)["vlref_exposure"])
+    want = srgb8(read_image(out / "final.exr").astype(np.float64), exposure)
+    assert np.abs(iio.imread(data, extension=".png").astype(int) - want).max() <= 1  # the EXR holds float32
+
+    def broken(*args):
+        raise OSError("disk full")
+    monkeypatch.setattr(render_cli, "write_png", broken)
+    with pytest.raises(OSError, match="disk full"):
+        main(["render", "pillars", "-o", str(tmp_path / "failed"), "-q", *SMALL])
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]  # no folder, no .failed.*.partial
 
 
 def test_half_float_stores_the_light_buffers_as_half(tmp_path):

@@ -19,7 +19,8 @@ from vlref.io.exr import _openexr, read_exr, write_exr
 from vlref.io.files import write_npy, write_npz, write_text
 from vlref.io.images import read_image
 from vlref.io.output_folders import output_dir
-from vlref.io.png import write_png
+from vlref.io import png as png_module
+from vlref.io.png import png_bytes, png_text, write_png
 from vlref.io.render_files import save_buffers, save_render
 from vlref.io.tonemap import _srgb8_values, _SRGB_BAND, srgb8
 
@@ -160,6 +161,20 @@ def test_png_preview_written_readable_and_tone_mapped(tmp_path):
     # grey input, NaN and negative values give valid pixels
     write_png(tmp_path / "g.png", np.array([[np.nan, -3.0, np.inf]]))
     assert [int(c) for c in iio.imread(tmp_path / "g.png")[0, :, 1]] == [0, 0, 255]
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 2), (2, 1), (63, 5), (64, 5), (65, 5), (130, 97), (200, 1100)])
+def test_png_bytes_decode_to_the_codes_and_do_not_depend_on_the_cores(shape, monkeypatch):
+    # every Sub-filter edge (one pixel, one column), one block of rows, a block boundary (64 rows), several
+    # blocks with blocks longer than deflate's 32 KiB window (200 x 1100 pixels: 64 rows = 211 kB)
+    rng = np.random.default_rng(sum(shape))
+    codes = rng.integers(0, 256, shape + (3,), dtype=np.uint8)
+    codes[: shape[0] // 2] //= 17  # a smooth half as well as noise: back-references across the blocks
+    data = png_bytes(codes, {"vlref_exposure": "2", "note": "\u00e9"})
+    np.testing.assert_array_equal(iio.imread(data, extension=".png"), codes)
+    assert png_text(data) == {"vlref_exposure": "2", "note": "\u00e9"}
+    monkeypatch.setattr(png_module, "host_cores", lambda: 1)
+    assert png_bytes(codes, {"vlref_exposure": "2", "note": "\u00e9"}) == data
 
 
 def test_srgb8_is_monotonic():

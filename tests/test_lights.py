@@ -14,8 +14,8 @@ from vlref.lights.cookies import load_cookie, sample_texture, spot_cookie_uv
 from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B, I_ATT, I_CONE
 from vlref.lights.shading import light_incidence
 from vlref.render import prepare_frame
-from vlref.scene.model import (ATTENUATIONS, CONE_LAWS, Box, CameraSettings, Cookie, Light, Plane, RenderSettings,
-                               Scene, ShadowSettings)
+from vlref.scene.model import (ATTENUATIONS, CONE_LAWS, Box, CameraSettings, Cookie, Light, Material, Plane,
+                               RenderSettings, Scene, ShadowSettings)
 
 NO_LUT = np.zeros((0, 0))
 R = 10.0
@@ -192,3 +192,30 @@ def test_scene_colour_applies_the_lights_shadow_strength_to_surfaces():
     shadow = np.all(none > full + 1e-3, axis=2)   # receiver pixels the box shadows
     assert shadow.sum() > 20 and np.allclose(full[shadow], 0.8 * 0.05)       # albedo x ambient only
     np.testing.assert_allclose(some, full + 0.7 * (none - full), rtol=1e-12, atol=1e-15)
+
+
+@pytest.mark.parametrize("shadows", [None, ShadowSettings(enabled=False)])
+def test_a_light_without_shadows_lights_surfaces_as_unoccluded_lambert(shadows):
+    """A light whose shadows are absent or disabled casts none on surfaces, as in the medium (docs/PHYSICS.md): the
+    ground under a box, which the same sun with shadows leaves at the ambient, is lit by the closed form
+    ``albedo (I cos(theta) / pi + ambient)`` of a white directional light of irradiance I at incidence theta."""
+    direction = np.array([1.0, -1.0, 0.3])
+    albedo, ambient, intensity = 0.6, 0.05, 2.5
+
+    def colour(sh):
+        light = Light(type="directional", direction=tuple(direction), intensity=intensity, shadows=sh)
+        scene = Scene(render=RenderSettings(width=40, height=30, ambient=(ambient,) * 3),
+                      camera=CameraSettings(position=(0.0, 6.0, -6.0), look_at=(0.0, 0.0, 0.5)), lights=(light,),
+                      objects=(Plane(material=Material(albedo=(albedo,) * 3)),
+                               Box(center=(0.0, 1.5, 0.0), size=(3.0, 0.2, 3.0))))
+        frame = prepare_frame(scene)
+        return frame.scene_colour, frame.gbuffer
+
+    got, g = colour(shadows)
+    shadowed, _ = colour(ShadowSettings())
+    ground = np.isfinite(g.depth) & (np.abs(g.position[..., 1]) < 1e-9)
+    cos_theta = -direction[1] / np.linalg.norm(direction)
+    want = albedo * (intensity * cos_theta / math.pi + ambient)
+    under_box = ground & np.all(np.isclose(shadowed, albedo * ambient, rtol=1e-12), axis=2)
+    assert under_box.sum() > 20                                   # the sun with shadows leaves these at ambient
+    np.testing.assert_allclose(got[ground], want, rtol=1e-12)     # without, every ground pixel is lit

@@ -47,7 +47,8 @@ def _run(scene, steps, beta, sigma_t=None, distance=None):
     trans = np.empty((h, w))
     march_physical(cam.position, cam.ray_directions(), np.minimum(dist, scene.render.max_distance),
                    np.full((h, w), beta), steps, medium, lights, _no_shadows(lights.count).table,
-                   build_geometry(scene).arrays, scene.techniques.physical.light_extinction, 4, per, trans)
+                   build_geometry(scene).arrays, scene.techniques.physical.light_extinction, 4, per, trans,
+                   (np.int64(0), np.int64(h)))
     return per, trans, cam
 
 
@@ -311,7 +312,20 @@ def test_exact_shadows_need_the_geometry():
     cam = camera_from_settings(scene.camera, 4, 3)
     with pytest.raises(ValueError, match="exact shadows, and geo is None"):
         march_physical(cam.position, cam.ray_directions(), np.full((3, 4), 50.0), np.full((3, 4), 0.5), 4,
-                       pack_medium(scene), pack_lights(scene), table.table, None, True, 2, per, trans)
+                       pack_medium(scene), pack_lights(scene), table.table, None, True, 2, per, trans,
+                       (np.int64(0), np.int64(3)))
+
+
+def test_the_march_refuses_rows_outside_the_image():
+    scene = _scene([Light(type="point", position=(0.0, 0.0, 3.0))], w=4, h=3)
+    table = _no_shadows(1)
+    per, trans = np.zeros((1, 3, 4, 3)), np.empty((3, 4))
+    cam = camera_from_settings(scene.camera, 4, 3)
+    for first, end in ((0, 4), (2, 1), (-1, 2)):  # past the last row, backwards, before the first row
+        with pytest.raises(ValueError, match="rows must satisfy"):
+            march_physical(cam.position, cam.ray_directions(), np.full((3, 4), 50.0), np.full((3, 4), 0.5), 4,
+                           pack_medium(scene), pack_lights(scene), table.table, None, True, 2, per, trans,
+                           (np.int64(first), np.int64(end)))
 
 
 @pytest.mark.parametrize("precision", ["float64", "float32"])
@@ -337,21 +351,29 @@ def test_a_pixel_does_not_depend_on_its_packet(precision):
             True, 3)
     per = np.full((4, 19, 27, 3), np.nan, dtype=dtype)
     trans = np.full((19, 27), np.nan, dtype=dtype)
-    march_physical(origin, dirs, t_end, beta, 8, *args, per, trans)
+    everything = (np.int64(0), np.int64(19))
+    march_physical(origin, dirs, t_end, beta, 8, *args, per, trans, everything)
     assert 27 % TILE_W and 19 % TILE_H  # partial tiles
     assert not np.isnan(trans).any() and not np.isnan(per).any()  # the march writes every pixel of every light
     assert per.max() > 0 and np.count_nonzero(per.sum(axis=-1), axis=(1, 2)).min() > 20
     # no light traces shadow rays: the kernel compiled without the ray tracer (geo None) gives the same bits
     lean, lean_t = np.zeros_like(per), np.empty_like(trans)
-    march_physical(origin, dirs, t_end, beta, 8, *args[:3], None, *args[4:], lean, lean_t)
+    march_physical(origin, dirs, t_end, beta, 8, *args[:3], None, *args[4:], lean, lean_t, everything)
     assert np.array_equal(lean, per) and np.array_equal(lean_t, trans)
+    # a band of rows (not a multiple of the tile's height, starting inside a tile) is written in place, and only it
+    band, band_t = np.full_like(per, np.nan), np.full_like(trans, np.nan)
+    march_physical(origin, dirs, t_end, beta, 8, *args, band, band_t, (np.int64(5), np.int64(12)))
+    assert np.array_equal(band[:, 5:12], per[:, 5:12]) and np.array_equal(band_t[5:12], trans[5:12])
+    assert np.isnan(band[:, :5]).all() and np.isnan(band[:, 12:]).all()
+    assert np.isnan(band_t[:5]).all() and np.isnan(band_t[12:]).all()
     for i in range(19):
         for j in range(27):
             one = np.zeros((4, 1, 1, 3), dtype=dtype)
             one_t = np.empty((1, 1), dtype=dtype)
             march_physical(origin, np.ascontiguousarray(dirs[i:i + 1, j:j + 1]),
                            np.ascontiguousarray(t_end[i:i + 1, j:j + 1]),
-                           np.ascontiguousarray(beta[i:i + 1, j:j + 1]), 8, *args, one, one_t)
+                           np.ascontiguousarray(beta[i:i + 1, j:j + 1]), 8, *args, one, one_t,
+                           (np.int64(0), np.int64(1)))
             assert np.array_equal(one[:, 0, 0], per[:, i, j]) and one_t[0, 0] == trans[i, j], (i, j)
 
 

@@ -2,13 +2,14 @@
 ``expm1``), and ``cast``."""
 
 import math
+import platform
 
 import numpy as np
 import pytest
 from hypothesis import given, strategies as st
 from numba import njit
 
-from vlref.numeric import arrays_do_not_overlap, cast, exp, expm1, fma, prefer_wide_vectors
+from vlref.numeric import arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, prefer_wide_vectors
 
 
 @njit(cache=True)
@@ -141,3 +142,65 @@ def test_arrays_do_not_overlap_marks_the_arguments_and_keeps_the_bits():
     assert declared.tobytes() == plain.tobytes() == (start + table[index] * 0.5).tobytes()
     # the return and exception pointers are noalias in both; the arrays' pointers only where declared
     assert _header(_gather_add_declared).count("noalias") > _header(_gather_add).count("noalias") == 2
+
+
+@njit(cache=True)
+def _glibc_exps(xs, out):
+    for i in range(xs.size):  # a lane loop: vectorised, as the bilateral blur's weights are
+        out[i] = glibc_exp(xs[i])
+
+
+def _libm_exp(x: float) -> float:
+    try:
+        return math.exp(x)
+    except OverflowError:
+        return math.inf
+
+
+def _same_bits_as_libm(xs) -> np.ndarray:
+    """The arguments whose ``glibc_exp`` differs from ``math.exp`` in any bit (NaN matches NaN)."""
+    got = np.empty_like(xs)
+    _glibc_exps(xs, got)
+    ref = np.array([_libm_exp(x) for x in xs])
+    return xs[(got.view(np.int64) != ref.view(np.int64)) & ~(np.isnan(got) & np.isnan(ref))]
+
+
+LIBM_IS_GLIBC = platform.libc_ver()[0] == "glibc"
+needs_glibc = pytest.mark.skipif(not LIBM_IS_GLIBC, reason="glibc_exp reproduces glibc's exp; this libm is another")
+
+
+@needs_glibc
+@pytest.mark.parametrize("lo, hi", [(-746.0, 0.0), (-1.0, 1.0), (-760.0, 720.0), (-745.2, -708.3), (-1100, -1000)])
+def test_glibc_exp_has_libms_bits_over_each_range(lo, hi):
+    # (-746, 0]: the depth weights' arguments; (-745.2, -708.3): results below 2^-1022 (glibc's extra rounding)
+    assert _same_bits_as_libm(np.random.default_rng(17).uniform(lo, hi, 100_000)).size == 0
+
+
+@needs_glibc
+def test_glibc_exp_has_libms_bits_on_any_float64_and_at_the_edges():
+    rng = np.random.default_rng(18)
+    anything = rng.integers(0, 2**63, 100_000, dtype=np.int64).view(np.float64)
+    edges = [0.0, -0.0, 2.0**-54, -(2.0**-54), 2.0**-55, 5e-324, 512.0, -512.0, np.nextafter(512.0, 0.0),
+             np.nextafter(-512.0, 0.0), 1024.0, -1024.0, 709.782712893384, 709.7827128933841, -708.3964185322641,
+             -745.1332191019411, -745.1332191019412, -746.0, math.inf, -math.inf, math.nan, 1e308, -1e308]
+    assert _same_bits_as_libm(np.concatenate([anything, -anything, edges])).size == 0
+
+
+@needs_glibc
+def test_glibc_exp_has_libms_bits_where_the_reduction_rounds_a_tie():
+    # x·128/ln2 within 40 ulp of a half-integer: where k = round(x·128/ln2) depends on how the product is rounded
+    # (glibc's build fuses it with the shifter's addition)
+    shift = 128 / math.log(2)
+    xs = []
+    for k in np.random.default_rng(19).integers(-95_000, 90_000, 100):
+        x = (k + 0.5) / shift
+        xs += [x + i * np.spacing(x) for i in range(-40, 41)]
+    assert _same_bits_as_libm(np.array(xs)).size == 0
+
+
+@needs_glibc
+@given(st.floats(allow_nan=True, allow_infinity=True))
+def test_glibc_exp_any_argument(x):
+    got, ref = glibc_exp(x), _libm_exp(x)
+    assert got == ref or (math.isnan(got) and math.isnan(ref))
+    assert math.isnan(ref) or math.copysign(1.0, got) == math.copysign(1.0, ref)  # a NaN's sign: not kept by LLVM

@@ -79,14 +79,15 @@ WEIGHT_KINDS = [("gaussian", 0.7, lambda d: math.exp(-(d * 0.7) * (d * 0.7))),
                 ("inverse", 1.0, lambda d: 1.0 / (d + 1e-3))]
 
 
-@pytest.mark.parametrize("shape", [(1, 1), (2, 9), (9, 2), (5, 6), (13, 11)])
+@pytest.mark.parametrize("shape", [(1, 1, 1), (2, 9, 4), (9, 2, 3), (5, 6, 2), (13, 11, 3), (3, 530, 3)])
 def test_bilateral_pass_same_bits_as_the_pixel_loop(shape):
     # each depth weight is computed once per pair of texels and serves both of their taps (|a - b| == |b - a|),
-    # sums vectorised over a line: still the pixel loop's bits, for every radius (wider than the image too),
-    # weight kind, sky and flat depth, and clamped edge
-    H, W = shape
+    # sums vectorised over stretches of a line (3 x 530: three stretches, the last one short): still the pixel loop's
+    # bits, for every radius (wider than the image too), weight kind, sky and flat depth, clamped edge, and channel
+    # count (RGB is written by a loop of its own)
+    H, W, C = shape
     rng = np.random.default_rng(31 * H + W)
-    v, z = image(rng, H, W, 3), depth_image(rng, H, W)
+    v, z = image(rng, H, W, C), depth_image(rng, H, W)
     for K in (1, 3, 7):
         g = gaussian_weights(K, K / 1.5)
         for kind, factor, weight in WEIGHT_KINDS:

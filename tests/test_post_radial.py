@@ -8,8 +8,8 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from post_cases import image, sizes
-from vlref.post.radial import (bilinear_sample, disenone_exposure, disenone_scatter, light_screen_uv,
-                               occlusion_opaque, occlusion_transparent, radial_blur, radiate)
+from vlref.post.radial import (ADDRESS_MODES, RADIAL_TILE, bilinear_sample, disenone_exposure, disenone_scatter,
+                               light_screen_uv, occlusion_opaque, occlusion_transparent, radial_blur, radiate)
 
 
 def tex(img, u, v, address="clamp"):
@@ -118,6 +118,14 @@ def test_off_screen_and_behind_camera():
     assert vis == 1.0 and u == 2.5
     with pytest.raises(ValueError):
         radial_blur(img, (np.nan, 0.5), 16, 1.0, 0.5, 0.95, 1.0)
+
+
+def test_radial_same_bits_as_the_pixel_loop_across_column_bands():
+    # wider than RADIAL_TILE: the columns are cut into bands of equal width (here 2 of 150), tiles taken on demand
+    img = image(np.random.default_rng(12), 3, RADIAL_TILE + 44, 2)
+    for address in ADDRESS_MODES:
+        got = radial_blur(img, (0.7, -0.4), 6, 0.9, 0.5, 0.95, 0.37, address)
+        assert np.array_equal(got, listing_13_1(img, (0.7, -0.4), 6, 6, 0.9, 0.5, 1.0, 0.95, address) * 0.37)
 
 
 def test_same_bits_for_any_thread_count():

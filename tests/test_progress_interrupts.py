@@ -42,6 +42,12 @@ def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
         sizes = [y1 - y0 for y0, y1 in got]
         assert len(got) == min(height, bands) and min(sizes) >= 1 and max(sizes) - min(sizes) <= 1
         assert calls == [(y1, height) for _, y1 in got]
+    for height, bands, multiple in ((1080, 64, 16), (1080, 17, 16), (19, 64, 16), (100, 3, 7), (5, 4, 1)):
+        got = list(row_bands(height, bands, multiple))
+        assert got[0][0] == 0 and got[-1][1] == height and all(a[1] == b[0] for a, b in zip(got, got[1:]))
+        assert len(got) == min(-(-height // multiple), bands) and all(y0 % multiple == 0 for y0, _ in got)
+        units = [-(-(y1 - y0) // multiple) for y0, y1 in got]  # the last band may end inside a unit
+        assert min(units) >= 1 and max(units) - min(units) <= 1
 
 
 def test_the_march_reports_progress_band_by_band():

@@ -23,7 +23,7 @@ from vlref.io.images import read_image
 from vlref.oracle.compare import compare_arrays, margin
 from vlref.oracle.edges import block_any, depth_discontinuities, dilate, edge_zone
 from vlref.oracle.presets import load_presets, tolerance
-from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge, judge_sequence
+from vlref.oracle.verdict import GROUP_OWN, GROUP_SCENE, judge, judge_sequence, shadow_zone, silhouette_zone
 from vlref.port import load_port, port_frame
 from vlref.port.export import export_port
 from vlref.render import prepare_frame
@@ -276,3 +276,24 @@ def test_gpu_float32_gives_each_pixel_vlrefs_own_rounding_spread_and_no_more(tmp
     np.save(manifest.parent / "port_upsample.npy", (rounded["upsample"] * 1.001).astype(np.float32))
     bug = _by_name(judge(manifest))["upsample"]
     assert not bug.passed and bug.metrics["failing_pixels"] - bug.metrics["failing_pixels_edge"] > 0
+
+
+def test_shading_zone_leaves_out_a_ground_that_casts_onto_itself_under_a_low_sun():
+    """anim_sun's ground under its sun 21 degrees high: the ground's own cascade climbs from texel to texel by more than
+    the 3 cm bias, so the min/max-filtered maps change the decision on nearly all sunlit ground (``shadow_zone``); the
+    shading comparisons' zone (``silhouette_zone``) holds only the points whose lookup is near a caster's edge in the
+    map and leaves most of the sunlit ground to the per-pixel and mean-error checks (that the zone is wide enough
+    for a faithful port's map lookups: tests/test_wgpu_port.py, tests/test_wgpu_froxel_port.py)."""
+    size = ["render.width=96", "render.height=54"]
+    frame = prepare_frame(load_scene("anim_sun", size))
+    unshadowed = prepare_frame(load_scene("anim_sun", [*size, "lights.0.shadows.enabled=false"])).scene_colour
+    g = frame.gbuffer
+    hit = np.isfinite(g.depth)
+    points = g.position[hit]
+    maps = frame.shadow_maps()
+    lit = frame.scene_colour.sum(axis=2) > 0.5 * unshadowed.sum(axis=2)   # the exact shadow ray's decision
+    sunlit = (hit & (np.abs(g.position[..., 1]) < 1e-9) & lit)[hit]
+    minmax, silhouettes = shadow_zone(maps, frame.lights, points, 1), silhouette_zone(maps, frame.lights, points, 2)
+    assert sunlit.sum() > 1000 and silhouettes.any()
+    assert minmax[sunlit].mean() > 0.9 and silhouettes[sunlit].mean() < 0.15, (minmax[sunlit].mean(),
+                                                                                silhouettes[sunlit].mean())

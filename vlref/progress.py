@@ -44,14 +44,17 @@ def bands_for(work: float, per_band: float) -> int:
     return int(min(BANDS, max(1, math.ceil(work / per_band))))
 
 
-def row_bands(height: int, bands: int | None = None) -> Iterator[tuple[int, int]]:
+def row_bands(height: int, bands: int | None = None, multiple: int = 1) -> Iterator[tuple[int, int]]:
     """Half-open row ranges ``[y0, y1)`` covering ``0..height`` in order: at most ``bands`` (default
-    :data:`BANDS`) of them, sizes differing by at most one row. After the caller has processed a band
-    (the generator resumes) the listener, if any, is told the rows done so far."""
-    n = max(1, min(int(height), int(BANDS if bands is None else bands)))
+    :data:`BANDS`) of them, each starting on a multiple of ``multiple`` rows (a kernel's tile height: a band
+    that ends inside a tile leaves a strip of short tiles), their sizes in units of ``multiple`` rows differing
+    by at most one (the last band may end short, at ``height``). After the caller has processed a band (the
+    generator resumes) the listener, if any, is told the rows done so far."""
+    units = -(-int(height) // int(multiple))
+    n = max(1, min(units, int(BANDS if bands is None else bands)))
     listener = _listener.get()
     for i in range(n):
-        y0, y1 = height * i // n, height * (i + 1) // n
+        y0, y1 = min(height, multiple * (units * i // n)), min(height, multiple * (units * (i + 1) // n))
         yield y0, y1
         if listener is not None:
             listener(y1, height)

@@ -6,7 +6,8 @@ Each variant sets WGSL override constants (declared in ``shaders/*.wgsl``) and/o
 A raster variant (:attr:`Variant.is_raster`) plants its bug in the raster passes (the killzone port's,
 ``ports/wgpu/shaders``: ``raster`` override constants, or a host switch) instead: vlref's march on the port's
 own buffers inherits the bug, so it passes there, and only the verdict against the scene
-(:func:`fx_check.sequence_verdict`) can fail it.
+(:func:`fx_check.sequence_verdict`) can fail it: :attr:`Variant.fails` names the comparisons that must fail (the
+first by at least 2x a bound) in every frame from :attr:`Variant.from_frame` on, and the frames before must pass.
 """
 
 from __future__ import annotations
@@ -26,6 +27,8 @@ class Variant:
     raster: dict = field(default_factory=dict)   # override constants of the raster passes (ports/wgpu/shaders)
     stale_raster_camera: bool = False            # host: G-buffer and lighting keep frame 0's camera (raster)
     scene: Optional[str] = None                  # the one scene whose motion shows a raster bug (None: every one)
+    fails: tuple = ()                            # raster: the comparisons against the scene that must fail (the
+    from_frame: int = 0                          # first by >= 2x a bound) in every frame from this one on, none before
 
     @property
     def is_raster(self) -> bool:
@@ -57,5 +60,11 @@ VARIANTS = {
     # a planted raster bug: own buffers pass (vlref marches on the buggy maps), the scene fails
     "stale_raster_camera": Variant("the G-buffer and lighting passes keep frame 0's camera (their uniform is not "
                                    "updated per frame); shadow maps, froxel passes and manifest have each frame's",
-                                   "fail", stale_raster_camera=True, scene="anim_sun"),
+                                   "fail", stale_raster_camera=True, scene="anim_sun", fails=("end_to_end", "depth"),
+                                   from_frame=1),
+    "sun_travel_dir": Variant("lighting: the sun's n.l taken with its direction of travel instead of toward it", "fail",
+                              raster={"BUG_SUN_TRAVEL_DIR": 1}, scene="anim_sun", fails=("scene_colour", "end_to_end")),
+    "sun_acne": Variant("lighting: the sun's cascades looked up at the surface point, without the normal offset "
+                        "(sunlit ground shadows itself: acne)", "fail", raster={"BUG_NO_NORMAL_OFFSET": 1},
+                        scene="anim_sun", fails=("scene_colour", "end_to_end")),
 }

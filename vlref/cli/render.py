@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import concurrent.futures
 import dataclasses
 import sys
 import time
@@ -11,7 +12,7 @@ from pathlib import Path
 from ..errors import InputError
 from ..io.files import write_bytes
 from ..io.output_folders import output_dir
-from ..io.png import png_bytes
+from ..io.png import png_bytes, write_png
 from ..io.render_files import save_render
 from ..io.tonemap import srgb8
 from ..render import render
@@ -65,12 +66,21 @@ def render_to_folder(scene, output, stages: bool = False, half_float: bool = Fal
         result = render(scene, stages=stages, progress=stage)
         earlier = _files(output)
         start = time.perf_counter()
-        exposure, png_meta, phrase = preview_exposure(scene, result.buffers["final"])
-        with output_dir(output) as out:
-            save_render(out, result, stages=stages, main=MAIN_BUFFERS, exposure=exposure, png_meta=png_meta,
-                        half=LIGHT_BUFFERS if half_float else ())
+        with output_dir(output) as out, concurrent.futures.ThreadPoolExecutor(1) as pool:
+            preview = pool.submit(_write_preview, scene, result.buffers["final"], out / "final.png")
+            save_render(out, result, stages=stages, main=MAIN_BUFFERS, half=LIGHT_BUFFERS if half_float else (),
+                        preview=False)
+            phrase = preview.result()
             kept = sorted(earlier - _files(out))
     return result, phrase, time.perf_counter() - start, kept
+
+
+def _write_preview(scene, final, path) -> str:
+    """Write the PNG preview of ``final`` at the scene's preview exposure (:func:`preview_exposure`) to ``path``;
+    the exposure's phrase. ``render_to_folder`` runs it on a thread beside the EXR files."""
+    exposure, png_meta, phrase = preview_exposure(scene, final)
+    write_png(path, final, exposure, png_meta)
+    return phrase
 
 
 def run(args) -> int:

@@ -15,8 +15,9 @@ and the distance to the light (``inf`` for a directional light).
 ``tr`` an exact RGB shadow ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed
 ``SURFACE_OFFSET`` along the normal) and ``strength`` the light's ``shadows.strength``
 (:func:`vlref.lights.shadow_lookup.apply_strength`: the ``V`` of docs/PHYSICS.md "The integral", which the march
-applies in the medium, and a GPU port's lighting pass on its surfaces; a light without shadows, absent or
-disabled, shadows surfaces fully: strength 1); the medium does not attenuate surface lighting here (the
+applies in the medium, and a GPU port's lighting pass on its surfaces). A light whose shadows are absent or
+disabled casts none, on surfaces as in the medium (the marches' ``SHADOW_NONE``, the reference's unshadowed
+lights): ``V_l = 1`` and no shadow ray runs. The medium does not attenuate surface lighting here (the
 volumetric pass applies the view transmittance). Pixels that hit nothing get ``render.sky_color``.
 """
 
@@ -138,9 +139,11 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
                 cos_n = nx * lx + ny * ly + nz * lz
                 if cos_n <= 0.0 or er + eg + eb == 0.0:
                     continue
-                vr, vg, vb = shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist, stack)
-                if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
-                    vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
+                vr, vg, vb = 1.0, 1.0, 1.0
+                if strength[k] > 0.0:   # strength 0: no shadow (shadows absent, disabled or of no strength)
+                    vr, vg, vb = shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist, stack)
+                    if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
+                        vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
                 sr += er * cos_n * vr
                 sg += eg * cos_n * vg
                 sb += eb * cos_n * vb
@@ -167,8 +170,8 @@ def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
     out = np.empty(gbuffer.normal.shape)
-    strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 1.0
-                         for li in scene.lights])
+    strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 0.0
+                         for li in scene.lights], dtype=np.float64)
     _shade(geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
            gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
            np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),

@@ -87,8 +87,8 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   the cascade, not table lookups or branches; vectorised, float64 rows ``Q_*`` and the uint64 ``taps``), the
   four depth reads for every lane (no branch: a read skipped for lanes that scatter nothing made the loop
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
-  under the condition; LLVM keeps the reads scalar on AVX-512 too, its cost model for Zen 4 and Sapphire
-  Rapids emits no gathers), then ``V`` (vectorised).
+  under the condition; with the arrays declared apart, :func:`_lit_fraction`, hardware gathers on AVX-512),
+  then ``V`` (vectorised).
 * Height fog: in a noiseless fog the fog exponent is linear in the step index, so the density is
   ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
   ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
@@ -118,7 +118,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
-from ..numeric import cast, exp, expm1, prefer_wide_vectors, zero_one
+from ..numeric import arrays_do_not_overlap, cast, exp, expm1, prefer_wide_vectors, zero_one
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
@@ -445,6 +445,21 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
+def _lit_fraction(q, taps, n, data, ubase):
+    """The PCF lit fraction of every lane (:func:`~vlref.lights.shadow_lookup.pcf_blend` of its taps, always inside
+    the map: :func:`~vlref.lights.shadow_lookup.pcf_taps` clamps them) from the maps' ``data`` at ``ubase``. No
+    branch, and the arrays are declared apart (:func:`vlref.numeric.arrays_do_not_overlap`): LLVM then reads the
+    four depths of eight lanes with one hardware gather each (AVX-512; without the promise a store to ``q`` might
+    change a later lane's read, and the loop stayed scalar)."""
+    prefer_wide_vectors()
+    arrays_do_not_overlap()
+    for m in range(n):
+        set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
+                                        lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m), lane(q, Q_W01, m),
+                                        lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
 def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     """The shadow lookup: visibility ``V`` per channel (the light's strength applied) where the sample
     scatters light, 1 elsewhere. A PCF map without a transparent layer: where the samples fall in the map, its
@@ -466,12 +481,8 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
             _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
         else:
             _cube_texels(s, q, taps, n, lf, k, res)
-        # the lit fraction: every lane reads its taps (always inside the map: pcf_taps clamps them); lanes that
-        # scatter nothing or that the map does not cover keep V = 1 in the loop after
-        for m in range(n):
-            set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
-                                            lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m),
-                                            lane(q, Q_W01, m), lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+        # the lit fraction; lanes that scatter nothing or that the map does not cover keep V = 1 in the loop after
+        _lit_fraction(q, taps, n, data, ubase)
         for m in range(n):  # V, the light's strength applied
             lit = lane(q, Q_LIT, m)
             fr, _, _ = apply_strength(strength, lit, lit, lit)
@@ -545,28 +556,30 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows, geo,
-                 per_light, transmittance):
-    """Take tasks, tiles of ``TILE_W x TILE_H`` pixels in row-major order of tiles (:func:`vlref.parallel.take`
-    on ``taken``), until none is left; per task, its pixels' transmittance, then per light its pairs with a
-    non-empty segment in packets of up to ``LANES``, set up by :func:`_setup` (module docstring)."""
+def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows,
+                 geo, per_light, transmittance):
+    """Take tasks, tiles of ``TILE_W x TILE_H`` pixels of the rows ``rows = (first, end)`` in row-major order of
+    tiles (:func:`vlref.parallel.take` on ``taken``), until none is left; per task, its pixels' transmittance,
+    then per light its pairs with a non-empty segment in packets of up to ``LANES``, set up by :func:`_setup`
+    (module docstring)."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
-    h, w = t_end.shape
+    first, end = rows
+    w = t_end.shape[1]
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
     taps = np.empty(5 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
-    tiles = tiles_x * ((h + TILE_H - 1) // TILE_H)
+    tiles = tiles_x * ((end - first + TILE_H - 1) // TILE_H)
     while True:
         task = take(taken)
         if task >= tiles:
             return
-        i0, j0 = (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
-        i1, j1 = min(h, i0 + TILE_H), min(w, j0 + TILE_W)
+        i0, j0 = first + (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
+        i1, j1 = min(end, i0 + TILE_H), min(w, j0 + TILE_W)
         for i in range(i0, i1):  # the pixel's transmittance, Beer–Lambert from the eye to t_end
             for j in range(j0, j1):
                 transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
@@ -601,8 +614,9 @@ def _march_tasks(taken, steps, light_extinction, leg_steps, origin, dirs, t_end,
 
 @njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                   per_light, transmittance):
-    """Fill ``per_light`` (n_lights, H, W, 3) and ``transmittance`` (H, W) (module docstring).
+                   per_light, transmittance, rows):
+    """Fill the rows ``rows = (first, end)`` (int64, ``first <= end <= H``) of ``per_light`` (n_lights, H, W, 3)
+    and ``transmittance`` (H, W) (module docstring); the other rows are left as they are.
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
@@ -610,6 +624,10 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").
+
+    A caller that marches a frame in bands of rows (:mod:`vlref.progress`) passes the whole arrays and each
+    band's ``rows``: the band is written in place, with no buffer of its own to allocate and copy (four lights at
+    1080p: 200 MB; BENCHMARKS.md "The march: bands in place, whole tiles, gathered depth reads").
 
     The pixels are split in tasks, tiles of ``TILE_W x TILE_H`` pixels. The threads of a ``prange`` over
     :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
@@ -621,8 +639,10 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
         for k in range(shadows.ints.shape[0]):
             if shadows.ints[k, S_MODE] == SHADOW_EXACT:
                 raise ValueError("march_physical: a light has exact shadows, and geo is None")
+    if not 0 <= rows[0] <= rows[1] <= t_end.shape[0]:
+        raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
         o, d, te, off, med, lts, shd, gg, out, tr = borrowed((origin, dirs, t_end, offsets, medium, lights, shadows,
                                                               geo, per_light, transmittance))
-        _march_tasks(taken, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)
+        _march_tasks(taken, rows, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)

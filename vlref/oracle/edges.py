@@ -19,7 +19,8 @@ image grows; it does not grow either.
 * :func:`block_any`: a full-resolution zone carried to a lower-resolution buffer (a texel is in the
   zone when any pixel of its block is).
 
-Shadow silhouettes measured in the light's texels are in :func:`vlref.oracle.verdict.shadow_zone`.
+Shadow silhouettes measured in the light's texels are in :func:`vlref.oracle.verdict.silhouette_zone` (the
+shading comparisons) and :func:`vlref.oracle.verdict.shadow_zone` (bias-sensitive map decisions).
 """
 
 from __future__ import annotations

@@ -24,10 +24,15 @@ A port passes only when two judgments pass:
   ``end_to_end``          its final frame against ``vlref render`` of the scene.
 
 Every comparison allows no failing pixel outside its edge zone (:mod:`vlref.oracle.edges`): depth
-discontinuities of vlref's and the port's depth and, for shading, the *shadow zone*, the surface points
-whose map lookup lies within ``edge_pixels`` texels of a shadow silhouette of either renderer's maps
-(:func:`shadow_zone`: the lit fraction changes when each texel is replaced by the min or the max of its
-(2k+1)² neighbourhood), all grown by ``edge_pixels`` pixels. The presets of the against-the-scene
+discontinuities of vlref's and the port's depth and, for the lit fraction (``shadow_test``), the *shadow zone*,
+the surface points where either renderer's map decides close to its bias (:func:`shadow_zone`: the lit fraction
+changes when each texel is replaced by the min or the max of its (2k+1)² neighbourhood; this holds a receiver
+that is its own caster, the ground under a low sun, whose stored distance climbs from texel to texel by more
+than the bias), all grown by ``edge_pixels`` pixels. The shading comparisons (``scene_colour``, ``end_to_end``)
+set vlref's exact shadow rays against a port's map lookups, which differ only where a caster's edge is near:
+their zone holds the surface points whose lookup lies within ``edge_pixels + LOOKUP_OFFSET_TEXELS`` texels of a
+silhouette of either renderer's maps (:func:`silhouette_zone`), so sunlit ground stays judged pixel by pixel and
+by the mean error outside the zone (ground that shadows itself fails there). The presets of the against-the-scene
 comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
 take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
@@ -64,7 +69,7 @@ from ..errors import InputError
 from ..io.files import write_text
 from ..io.output_folders import output_dir
 from ..lights import pack_lights
-from ..lights.pack import I_KIND
+from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shadow_pack import SHADOW_HARD, SHADOW_PCF, ShadowMaps
 from ..lights.shadow_probes import cast_rays, lit_at_points
 from ..port import load_port, port_frame
@@ -77,7 +82,8 @@ from .presets import tolerance
 from .report import json_ready, write_outputs
 
 __all__ = ["GROUP_OWN", "GROUP_SCENE", "SCENE_PRESETS", "DEFAULT_PRESET", "PassVerdict", "Verdict",
-           "SequenceVerdict", "judge", "judge_sequence", "shadow_zone", "write_verdict"]
+           "SequenceVerdict", "judge", "judge_sequence", "shadow_zone", "silhouette_zone",
+           "write_verdict"]
 
 GROUP_OWN = "own buffers"
 GROUP_SCENE = "against the scene"
@@ -107,6 +113,10 @@ MAP_JUMP = 5e-3
 """:func:`~vlref.oracle.edges.depth_discontinuities` threshold on shadow maps: a slope-scaled bias jumps where
 two flat casters meet (``slope_bias`` times the change of the slope, a few cm at metres: ~1e-3 relative),
 so a crease of a biased map is an edge though far below the camera depth's ``DEPTH_JUMP``."""
+LOOKUP_OFFSET_TEXELS = 1
+"""Texels a port's shadow lookup may sit from the surface point's own texel, added to the preset's ``edge_pixels``
+in the shading zone (:func:`silhouette_zone`): a port offsets its lookup along the normal against acne (ports/wgpu:
+1.5 texels times ``1 - n·l``, Holbert 2011), which moves the texel it reads by up to about one."""
 CAMERA_TOL = 1e-4
 """Largest accepted difference of the port's camera from the scene's: position (metres, relative to
 ``1 + |position|``), rotation matrix entries, and fov (degrees); float32 matrices round at ~1e-7."""
@@ -282,6 +292,36 @@ def shadow_zone(maps: ShadowMaps, packed, points: np.ndarray, k: int) -> np.ndar
             lo = _lit(_filtered(maps, light, k, ndimage.minimum_filter), packed, light, points)
             hi = _lit(_filtered(maps, light, k, ndimage.maximum_filter), packed, light, points)
             zone |= lo != hi
+    return zone
+
+
+def _silhouettes_marked(maps: ShadowMaps, light: int, orthographic: bool, k: int) -> ShadowMaps:
+    """``maps`` with ``light``'s texels within ``k`` texels of a silhouette of its map set to -1 (every lookup there
+    shadowed) and its other texels empty (lit). A silhouette is a :func:`~vlref.oracle.edges.depth_discontinuities`
+    (``MAP_JUMP``) of the quantity affine over a plane: the inverse of a perspective map's distance (spot, cube
+    faces: nearly affine), an orthographic map's distance itself (a cascade: its inverse bends sharply where a
+    receiver nears the cascade's ray plane)."""
+    data = maps.data.copy()
+    for _, li, start, count in maps.names:
+        if li == light:
+            res = int(round(math.sqrt(count)))
+            tile = maps.data[start:start + count].reshape(res, res).astype(np.float64)
+            edge = dilate(depth_discontinuities(_inverse(tile) if orthographic else tile, MAP_JUMP), k)
+            data[start:start + count] = np.where(edge, -1.0, np.inf).ravel()
+    return ShadowMaps(maps.ints, maps.floats, data, maps.tint, maps.names)
+
+
+def silhouette_zone(maps: ShadowMaps, packed, points: np.ndarray, k: int) -> np.ndarray:
+    """(N,) bool: ``points`` whose lookup in some light's map lies within ``k`` texels of a silhouette of that map
+    (a caster's edge, where the first surface along the light's rays jumps): only there can a shadow decision
+    taken per texel differ from an exact shadow ray. A receiver that is its own caster (the ground under a low
+    sun) is smooth in its map and stays out, however steeply its stored distance climbs from texel to texel."""
+    zone = np.zeros(len(points), bool)
+    for light in range(packed.count):
+        if _mapped(maps, light):
+            orthographic = int(packed.ints[light, I_KIND]) == KIND_DIRECTIONAL
+            # a marked tap darkens the lookup by its weight; PCF weights sum to 1 only up to rounding
+            zone |= _lit(_silhouettes_marked(maps, light, orthographic, k), packed, light, points) < 1.0 - 1e-9
     return zone
 
 
@@ -761,7 +801,8 @@ def _raster_against_scene(port, frame, frame_p, memo: dict) -> list[_Comparison]
     def shading_zone(kind):
         if kind not in zones:
             k = k_of(kind)
-            zone = shadow_zone(maps_ref, packed, points, k) | shadow_zone(maps_port, packed, points, k)
+            reach = k + LOOKUP_OFFSET_TEXELS
+            zone = silhouette_zone(maps_ref, packed, points, reach) | silhouette_zone(maps_port, packed, points, reach)
             zones[kind] = dilate(_on_pixels(zone, hit, False) | depth_edges, k)
         return zones[kind]
 

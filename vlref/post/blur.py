@@ -27,7 +27,8 @@ import math
 import numpy as np
 from numba import get_num_threads, njit, prange
 
-from vlref.numeric import arrays_do_not_overlap
+from vlref.numeric import arrays_do_not_overlap, glibc_exp, prefer_wide_vectors
+from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
@@ -54,24 +55,39 @@ def depth_delta_at(a, b):
     return 0.0 if a == b else abs(a - b)
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def _gaussian_weight(dz, factor):
+    """``exp(-(dz*factor)^2)`` with libm's bits (:func:`~vlref.numeric.glibc_exp`: 1 at 0, 0 below ``-745.13``, no
+    call, so a loop of them vectorises)."""
+    s = dz * factor
+    return glibc_exp(-(s * s))
+
+
 @njit(cache=True, fastmath=False)
 def _depth_weight(dz, code, factor, epsilon):
-    """``exp(-(dz*factor)^2)`` (``_GAUSSIAN``), 1 (``_UNIT``) or ``1/(dz + epsilon)`` (``_INVERSE``).
-
-    The Gaussian skips ``exp`` where its value is known exactly: 1 at argument 0, 0 below -746
-    (``exp`` underflows to 0 below ``-1075 ln 2 = -745.13``), so the bits are ``exp``'s.
-    """
+    """``exp(-(dz*factor)^2)`` (``_GAUSSIAN``, :func:`_gaussian_weight`), 1 (``_UNIT``) or ``1/(dz + epsilon)``
+    (``_INVERSE``)."""
     if code == _GAUSSIAN:
-        s = dz * factor
-        q = s * s
-        if q == 0.0:
-            return 1.0
-        if q > 746.0:
-            return 0.0
-        return math.exp(-q)
+        return _gaussian_weight(dz, factor)
     if code == _UNIT:
         return 1.0
     return 1.0 / (dz + epsilon)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _depth_weights(tap, at, code, factor, epsilon, out):
+    """``out[c] = W(dz(tap[c], at[c]))`` (:func:`_depth_weight`, :func:`depth_delta_at`) for every ``c``: one loop
+    per weight kind, which LLVM vectorises (NumPy's error model: ``epsilon > 0`` keeps the division finite)."""
+    prefer_wide_vectors()
+    if code == _GAUSSIAN:
+        for c in range(out.size):
+            out[c] = _gaussian_weight(depth_delta_at(tap[c], at[c]), factor)
+    elif code == _UNIT:
+        for c in range(out.size):
+            out[c] = 1.0
+    else:
+        for c in range(out.size):
+            out[c] = 1.0 / (depth_delta_at(tap[c], at[c]) + epsilon)
 
 
 def _weight_code(kind: str, factor: float, epsilon: float) -> int:
@@ -122,18 +138,31 @@ def _blur_lines(v, z, axis, taps_v, taps_z, centre, cross, g, code, factor, epsi
                 out[r, c, ch] /= wsum[c]
 
 
+_CHUNK = 256
+"""Columns that :func:`_bilateral_block` sums at a time: the sums of up to 4 channels and the weight sum stay in the L1
+cache (10 KiB) while the taps add to them."""
+
+
 @njit(cache=True, fastmath=False)
-def _pair_tables(z, r, axis, code, factor, epsilon, E, centre):
+def _pair_tables(z, r, axis, K, code, factor, epsilon, T, base):
     """The depth weights of line ``r`` (a row of ``z``) against its neighbours along ``axis``:
-    ``E[m - 1, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
-    ``centre[c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``)."""
+    ``T[base + m, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
+    ``T[base, c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``); vectorised
+    (:func:`_depth_weights`), the horizontal neighbours clamped to the last column one by one; the centre's from
+    the two values ``dz(z, z)`` can take."""
     H, W = z.shape
-    for m in range(1, E.shape[0] + 1):
-        for c in range(W):
-            tap = z[r, min(c + m, W - 1)] if axis == 1 else z[min(r + m, H - 1), c]
-            E[m - 1, c] = _depth_weight(depth_delta_at(tap, z[r, c]), code, factor, epsilon)
+    zr = z[r]
+    for m in range(1, K + 1):
+        if axis == 1:
+            inside = max(W - m, 0)
+            _depth_weights(zr[m:], zr[:inside], code, factor, epsilon, T[base + m, :inside])
+            for c in range(inside, W):
+                T[base + m, c] = _depth_weight(depth_delta_at(zr[W - 1], zr[c]), code, factor, epsilon)
+        else:
+            _depth_weights(z[min(r + m, H - 1)], zr, code, factor, epsilon, T[base + m])
+    same, nan = _depth_weight(0.0, code, factor, epsilon), _depth_weight(np.nan, code, factor, epsilon)
     for c in range(W):
-        centre[c] = _depth_weight(depth_delta_at(z[r, c], z[r, c]), code, factor, epsilon)
+        T[base, c] = same if zr[c] == zr[c] else nan  # dz(z, z): 0, or NaN for a NaN depth
 
 
 @njit(cache=True, fastmath=False)
@@ -149,29 +178,39 @@ def _planar_row(v, r, pad, out):
             out[ch, pad + W + c] = v[r, W - 1, ch]
 
 
-@njit(cache=True, fastmath=False)
-def _add_tap(w, rows, row, shift, acc, wsum):
-    """``acc[ch, c] += w[c] * rows[row, ch, c + shift]``, ``wsum[c] += w[c]``: one tap for a whole line
-    (vectorised)."""
+@njit(cache=True, fastmath=False, forceinline=True)
+def _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, end, c0, acc, wsum):
+    """One tap on the columns ``first <= c < end`` of the stretch that starts at column ``c0``: ``w = gk *
+    T[wrow, c + wshift]``, ``wsum[c - c0] += w``, ``acc[ch, c - c0] += w * rows[vrow, ch, c + vshift]`` (the indices
+    unsigned: no wrap-around select, so the loops vectorise; ``w`` recomputed per channel, the same product)."""
     arrays_do_not_overlap()
-    for c in range(w.size):
-        wsum[c] += w[c]
+    for c in range(first, end):
+        wsum[np.uint64(c - c0)] += gk * T[wrow, np.uint64(c + wshift)]
     for ch in range(acc.shape[0]):
-        for c in range(w.size):
-            acc[ch, c] += w[c] * rows[row, ch, c + shift]
+        for c in range(first, end):
+            acc[ch, np.uint64(c - c0)] += (gk * T[wrow, np.uint64(c + wshift)]) * rows[vrow, ch, np.uint64(c + vshift)]
 
 
-@njit(cache=True, fastmath=False, error_model="numpy")
-def _finish_line(acc, wsum, out, r):
-    """``out[r, c, ch] = acc[ch, c] / wsum[c]`` (vectorised: NumPy's error model, so a zero ``wsum`` would give
-    ``inf``/NaN rather than raise; the centre tap's weight keeps it positive)."""
+@njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
+def _finish_stretch(acc, wsum, n, out, r, c0):
+    """``out[r, c0 + i, ch] = acc[ch, i] / wsum[i]`` for ``i < n`` (vectorised: NumPy's error model, so a zero ``wsum``
+    would give ``inf``/NaN rather than raise; the centre tap's weight keeps it positive). Three channels (RGB) are
+    interleaved by a loop of their own with the channels spelled out, no inner loop over them (2.4 against 1.5 ms
+    for a 960x540 pass on one dev-box thread)."""
     arrays_do_not_overlap()
     for ch in range(acc.shape[0]):
-        for c in range(wsum.size):
-            acc[ch, c] = acc[ch, c] / wsum[c]
-    for c in range(wsum.size):
-        for ch in range(acc.shape[0]):
-            out[r, c, ch] = acc[ch, c]
+        for i in range(n):
+            acc[ch, i] = acc[ch, i] / wsum[i]
+    line = out[r]
+    if acc.shape[0] == 3:
+        for i in range(n):
+            line[c0 + i, 0] = acc[0, i]
+            line[c0 + i, 1] = acc[1, i]
+            line[c0 + i, 2] = acc[2, i]
+    else:
+        for i in range(n):
+            for ch in range(acc.shape[0]):
+                line[c0 + i, ch] = acc[ch, i]
 
 
 @njit(cache=True, fastmath=False)
@@ -180,51 +219,46 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     kernel small, which is most of its compile time)."""
     H, W, C = v.shape
     K = g.size - 1
-    E = np.empty((K + 1, K, W))
-    centre = np.empty((K + 1, W))
+    S = K + 1
+    T = np.empty(((K + 1) * S, W))
     rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
-    acc = np.empty((C, W))
-    wsum = np.empty(W)
-    w = np.empty(W)
+    acc = np.empty((C, _CHUNK))
+    wsum = np.empty(_CHUNK)
     if axis == 0:
         for p in range(max(r0 - K, 0), min(r0 + K, H)):
             _planar_row(v, p, 0, rows[p % (2 * K + 1)])
     for r in range(r0 if axis == 1 else max(r0 - K, 0), r1):
         slot = r % (K + 1)
-        _pair_tables(z, r, axis, code, factor, epsilon, E[slot], centre[slot])
+        _pair_tables(z, r, axis, K, code, factor, epsilon, T, slot * S)
         if r < r0:
             continue
         if axis == 1:
             _planar_row(v, r, K, rows[0])
         elif r + K <= H - 1:
             _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
-        acc[:] = 0.0
-        wsum[:] = 0.0
-        for t in range(2 * K + 1):
-            k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
-            gk = g[abs(k)]
-            if k == 0:
-                for c in range(W):
-                    w[c] = gk * centre[slot, c]
-            elif k > 0:
-                for c in range(W):
-                    w[c] = gk * E[slot, k - 1, c]
-            elif axis == 1:
-                for c in range(min(-k, W)):
-                    w[c] = gk * (centre[slot, 0] if c == 0 else E[slot, c - 1, 0])
-                for c in range(-k, W):
-                    w[c] = gk * E[slot, -k - 1, c + k]
-            elif r + k >= 0:
-                for c in range(W):
-                    w[c] = gk * E[(r + k) % (K + 1), -k - 1, c]
-            else:
-                for c in range(W):
-                    w[c] = gk * (centre[0, c] if r == 0 else E[0, r - 1, c])
-            if axis == 1:
-                _add_tap(w, rows, 0, K + k, acc, wsum)
-            else:
-                _add_tap(w, rows, min(max(r + k, 0), H - 1) % (2 * K + 1), 0, acc, wsum)
-        _finish_line(acc, wsum, out, r)
+        for c0 in range(0, W, _CHUNK):
+            c1 = min(c0 + _CHUNK, W)
+            for i in range(c1 - c0):
+                wsum[i] = 0.0
+            for ch in range(C):
+                for i in range(c1 - c0):
+                    acc[ch, i] = 0.0
+            for t in range(2 * K + 1):
+                k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
+                gk = g[abs(k)]
+                vrow, vshift = (0, K + k) if axis == 1 else (min(max(r + k, 0), H - 1) % (2 * K + 1), 0)
+                first, wrow, wshift = c0, slot * S + abs(k), 0
+                if k < 0 and axis == 1:
+                    first, wshift = min(max(c0, -k), c1), k
+                    for c in range(c0, first):  # tap k of column c < -k is clamped to column 0: its pair (0, c)
+                        w = gk * T[slot * S + c, 0]
+                        wsum[c - c0] += w
+                        for ch in range(C):
+                            acc[ch, c - c0] += w * rows[0, ch, K + k + c]
+                elif k < 0:
+                    wrow = ((r + k) % (K + 1)) * S - k if r + k >= 0 else r  # above row 0: row 0's pair (0, r)
+                _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, acc, wsum)
+            _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
@@ -240,15 +274,20 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     then ``acc / wsum``): the same bits.
 
     The values are read as planes of one line (:func:`_planar_row`), so a tap is one contiguous loop per channel
-    (:func:`_add_tap`). ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
+    (:func:`_add_tap`), and a line is summed in stretches of ``_CHUNK`` columns, all taps of a stretch before the next,
+    so its sums stay in the L1 cache (summed over whole lines, each tap loaded and stored them from L2: a fifth slower
+    on one thread). A line's depth tables are one array, ``K + 1`` rows per line (its centre, then ``m = 1..K``).
+    ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
     depth tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
     kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
-    work). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
+    work). The blocks get the arrays without reference counts (:func:`~vlref.parallel.borrowed`: each row passes
+    them to several functions). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
     """
     H = v.shape[0]
     n_items = max(1, min(H, blocks))
     for b in prange(n_items):
-        _bilateral_block(v, z, axis, g, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, out)
+        vb, zb, gb, ob = borrowed((v, z, g, out))
+        _bilateral_block(vb, zb, axis, gb, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, ob)
 
 
 def _line_buffers(v):

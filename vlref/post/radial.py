@@ -26,9 +26,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import get_num_threads, njit, prange
+from numba import njit, prange
 
 from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
+from vlref.parallel import WORKERS, borrowed, take
 from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
@@ -98,7 +99,7 @@ def bilinear_sample(image, u, v, address: str = "clamp") -> np.ndarray:
 
 
 RADIAL_TILE = 256
-"""Pixels of one row that the radial kernel carries through all its taps at once (:func:`_radial_tiles`)."""
+"""The most pixels of one row that the radial kernel carries through all its taps at once (:func:`_radial_tiles`)."""
 
 
 @njit(cache=True, fastmath=False)
@@ -159,10 +160,19 @@ def _row_index(yf, n, lo, hi, offset, repeat):
     return int(yf) % n if repeat else int(min(max(yf, lo), hi)) + offset
 
 
+RADIAL_RUN = 16
+"""Consecutive tiles of :func:`_radial_tiles` taken as one task."""
+
+
 @njit(cache=True, fastmath=False)
-def _radial_run(img, H, W, loop, mode, first, last, out):
-    """Tiles ``first <= tile < last`` of :func:`_radial_tiles` (one work item; a separate function keeps the
-    parallel kernel small, which is most of its compile time)."""
+def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
+    """Runs of :data:`RADIAL_RUN` consecutive tiles of :func:`_radial_tiles`, taken on demand
+    (:func:`~vlref.parallel.take`) until none is left; buffers allocated once, after the first task is taken (a
+    separate function keeps the parallel kernel small, which is most of its compile time)."""
+    tiles = (W + tile_w - 1) // tile_w * H
+    first = take(taken) * RADIAL_RUN
+    if first >= tiles:  # before any allocation: most workers find no task left
+        return
     lu, lv, scale, iterations, weight, tap_scale, decay, exposure, visibility = loop
     C = img.shape[2]
     flat = img.reshape(img.size)
@@ -171,59 +181,65 @@ def _radial_run(img, H, W, loop, mode, first, last, out):
     lo_x, hi_x = float(-offset), float(W - 1 + offset)
     lo_y, hi_y = float(-offset), float(H - 1 + offset)
     repeat = mode == ADDRESS_REPEAT
-    u, du, tx = np.empty(RADIAL_TILE), np.empty(RADIAL_TILE), np.empty(RADIAL_TILE)
-    ia, ib = np.empty(RADIAL_TILE, np.uint64), np.empty(RADIAL_TILE, np.uint64)
-    acc = np.empty((C, RADIAL_TILE))
-    for tile in range(first, last):
-        y = tile % H
-        x0 = (tile // H) * RADIAL_TILE
-        n = min(RADIAL_TILE, W - x0)
-        for x in range(n):
-            u[x] = (x0 + x + 0.5) / W
-            du[x] = (u[x] - lu) * scale
-        acc[:] = 0.0
-        v = (y + 0.5) / H
-        dv = (v - lv) * scale
-        w = 1.0
-        dec = 1.0
-        for i in range(iterations + 1):
-            if i > 0:
-                for x in range(n):
-                    u[x] = u[x] - du[x]
-                v = v - dv
-                w = dec * tap_scale * weight
-                dec = dec * decay
-            yy = v * H - 0.5
-            yf = math.floor(yy)
-            ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
-            rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
-            _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
-            _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
-        for x in range(n):
-            for ch in range(C):
-                out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
+    u, du, tx = np.empty(tile_w), np.empty(tile_w), np.empty(tile_w)
+    ia, ib = np.empty(tile_w, np.uint64), np.empty(tile_w, np.uint64)
+    acc = np.empty((C, tile_w))
+    while first < tiles:
+        for tile in range(first, min(first + RADIAL_RUN, tiles)):
+            y = tile % H
+            x0 = (tile // H) * tile_w
+            n = min(tile_w, W - x0)
+            for x in range(n):
+                u[x] = (x0 + x + 0.5) / W
+                du[x] = (u[x] - lu) * scale
+            acc[:] = 0.0
+            v = (y + 0.5) / H
+            dv = (v - lv) * scale
+            w = 1.0
+            dec = 1.0
+            for i in range(iterations + 1):
+                if i > 0:
+                    for x in range(n):
+                        u[x] = u[x] - du[x]
+                    v = v - dv
+                    w = dec * tap_scale * weight
+                    dec = dec * decay
+                yy = v * H - 0.5
+                yf = math.floor(yy)
+                ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
+                rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
+                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
+                _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+            for x in range(n):
+                for ch in range(C):
+                    out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
+        first = take(taken) * RADIAL_RUN
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _radial_tiles(img, H, W, loop, mode, items):
+def _radial_tiles(img, H, W, loop, mode):
     """Listing 13-1 on every pixel, then ``(C * exposure) * visibility``: (H, W, C). ``loop``: ``(lu, lv, scale,
     iterations, weight, tap_scale, decay, exposure, visibility)`` (:func:`_radial_loop`).
 
-    The image is cut into tiles of :data:`RADIAL_TILE` pixels of one row, ordered down the image column band by
-    column band; ``items`` parallel work items take consecutive runs of tiles (:func:`_radial_run`: a thread's
-    consecutive tiles read nearly the same texels, which stay in its cache; buffers allocated once per run). Per
-    tile, taps outer and pixels inner: the row's ``v`` (and so its texel row pair and ``ty``) is the same for
-    every pixel at each tap, each pixel's ``u`` is stepped by the same repeated subtraction as the shaders, and
-    the sums stay in a (C, tile) buffer. Per pixel the operations and their order are :func:`_fetch_add`'s, so
-    the bits are those of the pixel-by-pixel loop and independent of the thread count and the tiling. ``mode``:
-    an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0 on every side (a tap
-    outside reads 0 where the clamped index lands in the padding).
+    The image is cut into tiles of one row, as wide as :data:`RADIAL_TILE` allows with column bands of equal width
+    (1920 pixels: 8 bands of 240), ordered down the image column band by column band; the threads take runs of
+    :data:`RADIAL_RUN` consecutive tiles on demand (:func:`_radial_tasks`: a thread's consecutive tiles read nearly
+    the same texels, which stay in its cache; the tiles far from the light cost more, so an equal split would leave
+    threads idle). The workers get the arrays without reference counts (:func:`~vlref.parallel.borrowed`: every tap
+    passes the image to a function). Per tile, taps outer and pixels inner: the row's ``v`` (and so its texel row
+    pair and ``ty``) is the same for every pixel at each tap, each pixel's ``u`` is stepped by the same repeated
+    subtraction as the shaders, and the sums stay in a (C, tile) buffer. Per pixel the operations and their order
+    are :func:`_fetch_add`'s, so the bits are those of the pixel-by-pixel loop and independent of the thread count
+    and the tiling. ``mode``: an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0
+    on every side (a tap outside reads 0 where the clamped index lands in the padding).
     """
     out = np.empty((H, W, img.shape[2]))
-    tiles = (W + RADIAL_TILE - 1) // RADIAL_TILE * H
-    items = max(1, min(tiles, items))
-    for item in prange(items):
-        _radial_run(img, H, W, loop, mode, item * tiles // items, (item + 1) * tiles // items, out)
+    bands = (W + RADIAL_TILE - 1) // RADIAL_TILE
+    tile_w = (W + bands - 1) // bands
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        im, o = borrowed((img, out))
+        _radial_tasks(im, H, W, loop, mode, tile_w, taken, o)
     return out
 
 
@@ -247,7 +263,7 @@ def _radial_loop(image, light_uv, divisor: int, iterations: int, density: float,
         img3 = np.pad(img3, ((1, 1), (1, 1), (0, 0)))
     loop = (float(light_uv[0]), float(light_uv[1]), 1.0 / divisor * density, int(iterations), float(weight),
             float(tap_scale), float(decay), float(exposure), float(visibility))
-    out = _radial_tiles(img3, H, W, loop, mode, 4 * get_num_threads())
+    out = _radial_tiles(img3, H, W, loop, mode)
     return out if img.ndim == 3 else out[..., 0]
 
 

@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from ..march.patterns import offsets
-from ..march.physical import march_physical
+from ..march.physical import TILE_H, march_physical
 from ..medium import pack_medium
 from ..post.composite import composite_physical, sum_lights
 from ..progress import bands_for, row_bands
@@ -47,23 +47,19 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     packed = lights.astype(dtype)
     per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
     trans = np.empty((h, w), dtype=dtype)
-    # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); each band's
-    # lights go to a contiguous buffer (the kernel's one array layout): the band of per_light itself where it
-    # is contiguous (one light), else a buffer copied into place. Pixels are independent, so the bands change
-    # no bit of the result.
+    # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), each written in
+    # place (the march takes the whole arrays and the band's rows) and made of whole tiles of the march (a band
+    # ending inside a tile left a strip of one-row tiles: packets of 8 lanes). Pixels are independent, so the
+    # bands change no bit of the result.
     position = np.asarray(camera.position, dtype=dtype)
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
     # (a second, smaller kernel; vlref.march.physical.march_physical)
     traced = geo if shadow_maps.traces_rays else None
     per_band = SAMPLES_PER_BAND * numba.get_num_threads()
-    for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band)):
-        view = per_light[:, y0:y1]
-        band = view if view.flags.c_contiguous else np.empty(view.shape, dtype=dtype)
-        march_physical(position, dirs[y0:y1], t_end[y0:y1], beta[y0:y1], int(steps), medium, packed,
-                       shadow_maps.table, traced, bool(scene.techniques.physical.light_extinction),
-                       int(math.ceil(math.sqrt(steps))), band, trans[y0:y1])
-        if band is not view:
-            per_light[:, y0:y1] = band
+    for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band), TILE_H):
+        march_physical(position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.table, traced,
+                       bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light,
+                       trans, (np.int64(y0), np.int64(y1)))
     return per_light, trans
 
 

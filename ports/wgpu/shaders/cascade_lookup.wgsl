@@ -29,6 +29,18 @@ fn cascade_distance(t: vec2i, layer: i32) -> f32 {
 
 const NORMAL_OFFSET_TEXELS: f32 = 1.5;
 
+// The normal offset of a spot or point light's lookup at the surface point x of normal n (cos_n = n.l):
+// NORMAL_OFFSET_TEXELS texels of its map at x's distance (2 d tan(half fov) / res), times 1 - n.l, as
+// cascade_visibility offsets the sun's: a receiver's own map climbs by more than the bias over a texel where the
+// light grazes it, and a lookup at the point itself would shadow it (acne).
+fn local_normal_offset(li: Light, x: vec3f, n: vec3f, cos_n: f32) -> vec3f {
+    let m = local_map_lookup(li, x);
+    if (m.layer < 0) {
+        return vec3f(0.0);
+    }
+    return n * (NORMAL_OFFSET_TEXELS * 2.0 * m.d_ref * m.tan_h / li.shadow.y * (1.0 - cos_n));
+}
+
 // Visibility of a directional light `li` at the surface point x of normal n: ONE nearest texel of its cascade
 // (hard filter, as shadow_visibility); strength applied. The point is looked up offset along its normal by
 // NORMAL_OFFSET_TEXELS texels of the cascade that holds it, times 1 - n.l (normal-offset shadows, Holbert

@@ -1,5 +1,5 @@
 // Pass 3: the lit scene colour (deferred): albedo (sum E max(0, n.l) V / pi + ambient); sky colour. V: one
-// texel of the light's map (spot, point) or of its cascade (directional).
+// texel of the light's map (spot, point) or of its cascade (directional), looked up offset along the normal.
 @group(0) @binding(0) var<uniform> g: Globals;
 @group(0) @binding(1) var<storage, read> lights: array<Light>;
 @group(0) @binding(2) var shadow_tex: texture_depth_2d_array;
@@ -11,6 +11,8 @@
 
 override BUG_NO_INV_PI: bool = false;         // Lambert without its 1/pi
 override BUG_EYE_DEPTH_AS_RANGE: bool = false; // surface point at eye depth along the ray (as if ray length)
+override BUG_SUN_TRAVEL_DIR: bool = false;    // directional: n.l with the direction of travel, not toward the light
+override BUG_NO_NORMAL_OFFSET: bool = false;  // directional: cascade looked up at the surface point itself (acne)
 
 @fragment
 fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
@@ -26,13 +28,14 @@ fn fs_main(@builtin(position) pos: vec4f) -> @location(0) vec4f {
     for (var k = 0u; k < arrayLength(&lights); k++) {
         let li = lights[k];
         let inc = incidence(li, x);
-        let cos_n = dot(n, inc.l);
+        let sun = li.pos_kind.w == 2.0;
+        let cos_n = dot(n, select(inc.l, -inc.l, BUG_SUN_TRAVEL_DIR && sun));
         if (cos_n > 0.0) {
             var v: f32;
-            if (li.pos_kind.w == 2.0) {
-                v = cascade_visibility(li, x, n);
+            if (sun) {
+                v = cascade_visibility(li, x, select(n, vec3f(0.0), BUG_NO_NORMAL_OFFSET));
             } else {
-                v = shadow_visibility(li, x);
+                v = shadow_visibility(li, x + local_normal_offset(li, x, n, cos_n));
             }
             s += inc.e * cos_n * v;
         }

@@ -1,0 +1,70 @@
+"""SHA-256 of the physical march's buffers, to show that a change of the march keeps the bits (BENCHMARKS.md, "The
+march: bands in place, whole tiles, gathered depth reads").
+
+Every bundled scene (16) and the bench scene (b) (four PCF-shadowed lights), at 48x27x16, each in the variants
+{pcf, hard maps} x {float64, float32} x {light leg on, off}: :func:`vlref.techniques.physical.march_buffers`'s
+``per_light`` and ``transmittance``, one digest each.
+
+    PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-old python3 benchmarks/march_hashes.py > before.json   # the old tree
+    PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-new python3 benchmarks/march_hashes.py before.json     # exit 1 on a change
+"""
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from vlref.bench.config import bench_scene
+from vlref.render import prepare_frame
+from vlref.scene.bundled import bundled_scenes
+from vlref.scene.load import load_scene
+from vlref.scene.technique_params import resolved
+from vlref.techniques.physical import march_buffers
+
+SIZE = ("render.width=48", "render.height=27", "render.steps=16", "render.technique=physical")
+VARIANTS = tuple(itertools.product(("pcf", "hard"), ("float64", "float32"), (True, False)))
+
+
+def _digest(array: np.ndarray) -> str:
+    return hashlib.sha256(np.ascontiguousarray(array).tobytes()).hexdigest()[:16]
+
+
+def hashes(scene) -> dict:
+    """Digest of ``per_light`` and ``transmittance`` of ``scene`` in each variant."""
+    out = {}
+    for shadow_filter, precision, leg in VARIANTS:
+        varied = dataclasses.replace(
+            scene, render=dataclasses.replace(scene.render, precision=precision),
+            techniques=dataclasses.replace(scene.techniques, physical=dataclasses.replace(
+                scene.techniques.physical, light_extinction=leg)))
+        frame = prepare_frame(varied)
+        maps = frame.shadow_maps(shadow_filter)
+        per_light, trans = march_buffers(frame.scene, frame.camera, frame.gbuffer.distance, frame.lights, maps,
+                                         frame.geometry.arrays, resolved(frame.scene, "steps"),
+                                         resolved(frame.scene, "sampling"))
+        key = f"{shadow_filter}.{precision}.{'leg' if leg else 'noleg'}"
+        out[f"{key}.per_light"], out[f"{key}.transmittance"] = _digest(per_light), _digest(trans)
+    return out
+
+
+def main() -> int:
+    scenes = {"bench_four": bench_scene(48, 27, 16, "four", 256)}
+    scenes.update({name: load_scene(name, SIZE) for name in sorted(bundled_scenes())})
+    result = {name: hashes(scene) for name, scene in scenes.items()}
+    if len(sys.argv) < 2:
+        json.dump(result, sys.stdout, indent=1)
+        return 0
+    before = json.loads(Path(sys.argv[1]).read_text())
+    # a buffer on either side only, or with another digest
+    keys = {(s, k) for side in (before, result) for s in side for k in side[s]}
+    changed = sorted(f"{s}: {k}" for s, k in keys if before.get(s, {}).get(k) != result.get(s, {}).get(k))
+    print("\n".join(changed) or f"same bits: {len(keys)} buffers of {len(result)} scenes")
+    return 1 if changed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
