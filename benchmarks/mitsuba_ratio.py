@@ -8,33 +8,37 @@ Mitsuba's ``volpath`` integrator (``max_depth = 2``: exactly single scattering, 
 called on those rays through its Python API, so no film filter or camera convention differs.
 
 1. The converged answer: :func:`~vlref.reference.render_reference` at ``rel_tol = 1e-9``.
-2. ``vlref reference`` at each ``--rel-tol`` (default 1e-4, the command's default, and 1e-2): its wall time (median of
-   3 after a warm-up) and its per-pixel error against the converged answer (max over RGB): median and 99th
+2. ``vlref reference`` at each setting ``rel_tol/shadow_samples`` of ``--vlref`` (the default 1e-4/512 and
+   coarser ones; ``shadow_samples`` is the shadow-boundary grid, ``vlref reference --shadow-samples``): its wall
+   time (median of the timed runs after a warm-up: ``--repeats`` before Mitsuba's runs and as many after, so load
+   drifts hit both renderers) and its per-pixel error against the converged answer (max over RGB): median and 99th
    percentile.
 3. Mitsuba (``llvm_ad_rgb``, every core Dr.Jit finds) at increasing samples per pixel: wall time (after a warm-up
-   pass that compiles its kernels) and the same error statistics.
-4. The target is vlref's error, floored by what the comparison can resolve: per statistic the larger of vlref's
-   error and the converged answer's own error bound (``ReferenceResult.error``; where vlref's result equals the
-   converged one bit for bit its measured error is 0). Where Mitsuba's largest run is still above the target, the
-   samples it would need follow from the Monte Carlo law ``error ∝ spp^-1/2`` (the slope fitted to the measured runs
-   is printed) applied to each statistic, and its time from its measured time per sample (linear in spp). The ratio
-   is Mitsuba's time to vlref's; ``lower_bound`` is the ratio of Mitsuba's largest run, whose error is still above
-   the target (measured, no extrapolation). Mitsuba's ``*_rgb`` variants compute in float32, whose round-off
-   (~1e-7 relative) floors the error it can reach at any spp: below that the extrapolation is a formal figure.
-5. ``same_time``: Mitsuba's error in its run closest to vlref's time.
+   pass that compiles its kernels) and the same error statistics. The next spp is skipped once its projected time
+   (linear in spp) passes ``--mitsuba-budget`` seconds.
+4. **Measured ratio at the same error**: for each Mitsuba run, the fastest vlref setting whose median *and* 99th
+   percentile errors are both no larger than Mitsuba's; the ratio is Mitsuba's time over that setting's time.
+   Both are measured; vlref's error is then at most Mitsuba's (usually well below), so the ratio is a lower bound
+   of the ratio at exactly equal error.
+5. Context, the extrapolation (no measurement): the error vlref's default setting reaches, floored by what the
+   comparison can resolve (per statistic the larger of vlref's error and the converged answer's own error bound
+   ``ReferenceResult.error``). Mitsuba's spp for it follow from ``error ∝ spp^-1/2`` (the slope fitted to the
+   measured runs is printed) and its time from its time per sample. Mitsuba's ``*_rgb`` variants compute in
+   float32, whose round-off (~1e-7 relative) floors the error it can reach at any spp: far below Mitsuba's
+   measured errors the extrapolation is a formal figure.
 
 Run from the repository root (``pip install mitsuba``):
 
-    python benchmarks/mitsuba_ratio.py [--width 80 --height 45 --spp 16,64,256,1024 --out FILE.json]
+    python benchmarks/mitsuba_ratio.py [--width 80 --height 45 --spp 256,1024,4096,16384 --out FILE.json]
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import math
 import os
 import platform
+import sys
 import time
 
 import numba
@@ -45,7 +49,7 @@ from vlref.reference.mitsuba import mitsuba_scene
 from vlref.render import prepare_frame
 from vlref.scene.model import Bounds, Box, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings, Sphere
 
-SPP_PER_PASS = 64  # Mitsuba's samples per pixel per launch (bounds the wavefront's memory)
+SPP_PER_PASS = 1024  # Mitsuba's samples per pixel per launch (80x45: 3.7 M paths, 0.5 GB; faster than 64 or 256)
 
 
 def bench_scene(width: int, height: int) -> Scene:
@@ -68,15 +72,27 @@ def errors(image: np.ndarray, converged: np.ndarray) -> dict:
     return {"median": med, "p99": p99, "median_rel_peak": med / peak, "p99_rel_peak": p99 / peak}
 
 
-def time_vlref(scene: Scene, rel_tol: float, converged: np.ndarray, repeats: int = 3) -> dict:
-    render_reference(scene, rel_tol=rel_tol)  # compiles (first call) / warms
+def parse_settings(text: str) -> list[tuple[float, int]]:
+    """``"1e-4/512,1e-1/4"`` -> ``[(1e-4, 512), (0.1, 4)]`` (rel_tol / shadow_samples)."""
+    out = []
+    for item in text.split(","):
+        rel_tol, samples = item.split("/")
+        out.append((float(rel_tol), int(samples)))
+    return out
+
+
+def run_vlref(scene: Scene, setting: tuple[float, int], converged: np.ndarray, repeats: int) -> dict:
+    """``repeats`` timed runs of one setting (after a warm-up run) and the result's error."""
+    rel_tol, samples = setting
+    render_reference(scene, rel_tol=rel_tol, shadow_samples=samples)  # compiles (first call) / warms
     seconds = []
     for _ in range(repeats):
         start = time.perf_counter()
-        result = render_reference(scene, rel_tol=rel_tol)
+        result = render_reference(scene, rel_tol=rel_tol, shadow_samples=samples)
         seconds.append(time.perf_counter() - start)
-    return {"rel_tol": rel_tol, "seconds": float(np.median(seconds)), "runs_s": seconds,
-            **errors(result.inscatter, converged)}
+    out = {"rel_tol": rel_tol, "shadow_samples": samples, "runs_s": seconds, **errors(result.inscatter, converged)}
+    print(f"(progress) vlref {rel_tol:g}/{samples}: runs {seconds}, p99 {out['p99']:.3g}", file=sys.stderr, flush=True)
+    return out
 
 
 class MitsubaRays:
@@ -116,14 +132,32 @@ class MitsubaRays:
         return (total / spp).reshape(*self.shape, 3)
 
 
-def time_mitsuba(rays: MitsubaRays, spp_list: list[int], converged: np.ndarray) -> list[dict]:
+def time_mitsuba(rays: MitsubaRays, spp_list: list[int], converged: np.ndarray, budget: float) -> list[dict]:
     for size in sorted({min(SPP_PER_PASS, spp) for spp in spp_list}):  # compiles Dr.Jit's kernels, per pass size
         rays.radiance(size, seed=999)
     out = []
     for i, spp in enumerate(spp_list):
+        if out and out[-1]["seconds"] * spp / out[-1]["spp"] > budget:
+            break
         start = time.perf_counter()
         image = rays.radiance(spp, seed=i + 1)
         out.append({"spp": spp, "seconds": time.perf_counter() - start, **errors(image, converged)})
+        print(f"(progress) mitsuba {spp} spp: {out[-1]['seconds']:.3f} s, p99 {out[-1]['p99']:.3g}", file=sys.stderr,
+              flush=True)
+    return out
+
+
+def at_same_error(mitsuba: list[dict], vlref: list[dict]) -> list[dict]:
+    """Per Mitsuba run, the fastest vlref setting with median and 99th percentile errors both no larger than
+    Mitsuba's, and the time ratio (None where no setting reaches that error)."""
+    out = []
+    for m in mitsuba:
+        fits = [v for v in vlref if v["median"] <= m["median"] and v["p99"] <= m["p99"]]
+        best = min(fits, key=lambda v: v["seconds"]) if fits else None
+        out.append({"spp": m["spp"], "mitsuba_seconds": m["seconds"], "mitsuba_error": [m["median"], m["p99"]],
+                    "vlref": None if best is None else {k: best[k] for k in ("rel_tol", "shadow_samples", "seconds",
+                                                                                "median", "p99")},
+                    "ratio": None if best is None else m["seconds"] / best["seconds"]})
     return out
 
 
@@ -149,8 +183,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--width", type=int, default=80)
     ap.add_argument("--height", type=int, default=45)
-    ap.add_argument("--rel-tol", default="1e-4,1e-2", help="vlref reference tolerances (comma-separated)")
-    ap.add_argument("--spp", default="16,64,256,1024", help="Mitsuba samples per pixel (comma-separated)")
+    ap.add_argument("--vlref", default="1e-4/512,1e-2/64,1e-2/16,1e-1/8,1e-1/4",
+                    help="vlref reference settings rel_tol/shadow_samples (comma-separated; the first is the context "
+                         "of the extrapolation)")
+    ap.add_argument("--repeats", type=int, default=3, help="timed vlref runs before and after Mitsuba's (each)")
+    ap.add_argument("--spp", default="256,1024,4096,16384", help="Mitsuba samples per pixel (comma-separated)")
+    ap.add_argument("--mitsuba-budget", type=float, default=120.0,
+                    help="skip a Mitsuba run whose projected time passes this many seconds")
     ap.add_argument("--out", default=None, help="write the report as JSON here")
     args = ap.parse_args()
     scene = bench_scene(args.width, args.height)
@@ -162,44 +201,52 @@ def main() -> None:
               "converged": {"rel_tol": 1e-9, "seconds": time.perf_counter() - start,
                             "unconverged_pixels": int(converged.stats.get("unconverged", 0)),
                             "max_error_bound_rel_peak": float(converged.max_error / converged.inscatter.max())}}
-    report["vlref"] = [time_vlref(scene, float(t), converged.inscatter) for t in args.rel_tol.split(",")]
+    settings = parse_settings(args.vlref)
+    report["vlref"] = [run_vlref(scene, s, converged.inscatter, args.repeats) for s in settings]
     rays = MitsubaRays(scene)
     report["machine"]["drjit_threads"] = rays.dr.thread_count()
-    report["mitsuba"] = time_mitsuba(rays, [int(s) for s in args.spp.split(",")], converged.inscatter)
+    report["mitsuba"] = time_mitsuba(rays, [int(s) for s in args.spp.split(",")], converged.inscatter,
+                                     args.mitsuba_budget)
+    for v, s in zip(report["vlref"], settings):  # the same runs after Mitsuba's: load drifts hit both renderers
+        v["runs_s"] += run_vlref(scene, s, converged.inscatter, args.repeats)["runs_s"]
+        v["seconds"] = float(np.median(v["runs_s"]))
+    report["same_error"] = at_same_error(report["mitsuba"], report["vlref"])
     floor = {"median": float(np.median(converged.error)), "p99": float(np.percentile(converged.error, 99))}
     report["converged"]["error_bound"] = floor
-    report["ratios"] = []
-    for v in report["vlref"]:
-        target = {s: max(v[s], floor[s]) for s in ("median", "p99")}
-        need = needed(report["mitsuba"], target)
-        last = report["mitsuba"][-1]
-        same = min(report["mitsuba"], key=lambda m: abs(math.log(m["seconds"] / v["seconds"])))
-        report["ratios"].append({"rel_tol": v["rel_tol"], "target": target, "mitsuba_spp": need["spp"],
-                                 "mitsuba_seconds": need["seconds"], "measured": need["measured"],
-                                 "slopes": need["slopes"], "ratio": need["seconds"] / v["seconds"],
-                                 "spp_per_statistic": need["spp_per_statistic"],
-                                 "ratio_per_statistic": {s: last["seconds"] * n / last["spp"] / v["seconds"]
-                                                         for s, n in need["spp_per_statistic"].items()},
-                                 "lower_bound": None if need["measured"] else last["seconds"] / v["seconds"],
-                                 "same_time": same})
+    default = report["vlref"][0]
+    target = {s: max(default[s], floor[s]) for s in ("median", "p99")}
+    need = needed(report["mitsuba"], target)
+    last = report["mitsuba"][-1]
+    report["extrapolated"] = {"rel_tol": default["rel_tol"], "shadow_samples": default["shadow_samples"],
+                              "target": target, "mitsuba_spp": need["spp"], "mitsuba_seconds": need["seconds"],
+                              "measured": need["measured"], "slopes": need["slopes"],
+                              "ratio": need["seconds"] / default["seconds"],
+                              "spp_per_statistic": need["spp_per_statistic"],
+                              "ratio_per_statistic": {s: last["seconds"] * n / last["spp"] / default["seconds"]
+                                                      for s, n in need["spp_per_statistic"].items()}}
     print(f"machine: {report['machine']}; {args.width}x{args.height}; converged answer {report['converged']}")
     for v in report["vlref"]:
-        print(f"vlref reference rel_tol {v['rel_tol']:g}: {v['seconds']:.3f} s, error median {v['median']:.3g} "
-              f"p99 {v['p99']:.3g} ({v['median_rel_peak']:.2g} / {v['p99_rel_peak']:.2g} of the peak)")
+        print(f"vlref reference rel_tol {v['rel_tol']:g} shadow_samples {v['shadow_samples']}: {v['seconds']:.4f} s "
+              f"(runs {', '.join(f'{t:.4f}' for t in v['runs_s'])}), error median {v['median']:.3g} p99 "
+              f"{v['p99']:.3g} ({v['median_rel_peak']:.2g} / {v['p99_rel_peak']:.2g} of the peak)")
     for m in report["mitsuba"]:
         print(f"mitsuba {m['spp']:6d} spp: {m['seconds']:.3f} s, error median {m['median']:.3g} p99 {m['p99']:.3g} "
               f"({m['median_rel_peak']:.2g} / {m['p99_rel_peak']:.2g} of the peak)")
-    for r in report["ratios"]:
-        how = "measured" if r["measured"] else "extrapolated by spp^-1/2"
-        same = r["same_time"]
-        print(f"rel_tol {r['rel_tol']:g}: target median {r['target']['median']:.3g} p99 {r['target']['p99']:.3g}; "
-              f"Mitsuba needs {r['mitsuba_spp']:.3g} spp, {r['mitsuba_seconds']:.4g} s ({how}; fitted slopes median "
-              f"{r['slopes']['median']:.2f}, p99 {r['slopes']['p99']:.2f}): vlref reference is {r['ratio']:.4g}x "
-              f"faster (median alone {r['ratio_per_statistic']['median']:.3g}x, p99 alone "
-              f"{r['ratio_per_statistic']['p99']:.3g}x; measured lower bound: {r['lower_bound'] or r['ratio']:.3g}x); "
-              f"in about vlref's time "
-              f"({same['seconds']:.3g} s, {same['spp']} spp) Mitsuba's error is median {same['median']:.3g}, "
-              f"p99 {same['p99']:.3g}")
+    for r in report["same_error"]:
+        v = r["vlref"]
+        if v is None:
+            print(f"mitsuba {r['spp']} spp: no vlref setting reaches its error")
+            continue
+        print(f"same error as Mitsuba {r['spp']} spp ({r['mitsuba_seconds']:.3f} s, median {r['mitsuba_error'][0]:.3g}"
+              f" p99 {r['mitsuba_error'][1]:.3g}): vlref rel_tol {v['rel_tol']:g} shadow_samples "
+              f"{v['shadow_samples']}, {v['seconds']:.4f} s, median {v['median']:.3g} p99 {v['p99']:.3g}: "
+              f"**{r['ratio']:.4g}x** (measured)")
+    e = report["extrapolated"]
+    how = "measured" if e["measured"] else "extrapolated by spp^-1/2"
+    print(f"context: vlref's default error (median {e['target']['median']:.3g}, p99 {e['target']['p99']:.3g}) needs "
+          f"Mitsuba {e['mitsuba_spp']:.3g} spp, {e['mitsuba_seconds']:.4g} s ({how}; fitted slopes median "
+          f"{e['slopes']['median']:.2f}, p99 {e['slopes']['p99']:.2f}): {e['ratio']:.4g}x (median alone "
+          f"{e['ratio_per_statistic']['median']:.3g}x, p99 alone {e['ratio_per_statistic']['p99']:.3g}x)")
     if args.out:
         with open(args.out, "w") as fh:
             json.dump(report, fh, indent=1)

@@ -121,12 +121,18 @@ def test_console_script_entry_point_runs():
 def test_reference_writes_reference_and_error_and_reports_the_largest_estimate(tmp_path, capsys):
     out = tmp_path / "ref"
     assert main(["reference", "pillars", "-o", str(out), "--set", "render.width=12", "--set", "render.height=8",
-                 "--rel-tol", "1e-3"]) == 0
+                 "--rel-tol", "1e-3", "--shadow-samples", "64"]) == 0
     assert "largest error estimate" in capsys.readouterr().out
     ref = read_image(out / "reference.exr")
     err = read_image(out / "error.exr")[..., 0]
     assert ref.shape == (8, 12, 3) and np.isfinite(ref).all()
     assert (err >= 0).all() and np.isfinite(err).all()
+
+
+def test_reference_refuses_an_empty_shadow_grid(tmp_path, capsys):
+    assert main(["reference", "pillars", "-o", str(tmp_path / "ref"), "--shadow-samples", "0"]) == 2
+    assert "--shadow-samples: must be at least 1, not 0" in capsys.readouterr().err
+    assert not (tmp_path / "ref").exists()
 
 
 def test_bias_reports_error_against_steps(tmp_path, capsys):

@@ -23,7 +23,7 @@ import pytest
 import vlref
 from vlref import progress
 from vlref.progress import reporting, row_bands
-from vlref.reference import render_reference
+from vlref.reference import quadrature, render_reference
 from vlref.render import render
 from vlref.scene import load_scene
 
@@ -77,12 +77,22 @@ def test_a_small_march_runs_in_one_band():
     assert calls == [(18, 18)]
 
 
-def test_the_reference_reports_progress_band_by_band():
+def test_the_reference_reports_progress_band_by_band(monkeypatch):
     scene = load_scene("pillars", ["render.width=12", "render.height=10"])
+    monkeypatch.setattr(quadrature, "RAYS_PER_BAND", 1)  # as many bands as rows
     calls = []
     with reporting(lambda done, total: calls.append((done, total))):
         render_reference(scene, rel_tol=1e-2, shadow_samples=16)
     assert calls == [(y, 10) for y in range(1, 11)]
+
+
+def test_a_small_reference_runs_in_one_band():
+    """Bands are sized by their shadow rays (quadrature.RAYS_PER_BAND per thread): a small image is one launch."""
+    scene = load_scene("pillars", ["render.width=12", "render.height=10"])
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total))):
+        render_reference(scene, rel_tol=1e-2, shadow_samples=16)
+    assert calls == [(10, 10)]
 
 
 @pytest.mark.parametrize("technique", ["physical", "reference"])
@@ -94,6 +104,7 @@ def test_bands_change_no_bit(monkeypatch, technique):
     for bands in (1, 5):
         monkeypatch.setattr(progress, "BANDS", bands)
         monkeypatch.setattr(physical, "SAMPLES_PER_BAND", 1)  # as many bands as BANDS allows
+        monkeypatch.setattr(quadrature, "RAYS_PER_BAND", 1)
         if technique == "reference":
             res = render_reference(scene, rel_tol=1e-2, shadow_samples=16)
             runs.append({"inscatter": res.inscatter, "transmittance": res.transmittance, "error": res.error})

@@ -1,6 +1,7 @@
 """The quadrature reference against closed forms: the true error must lie within the reported bound."""
 
 import dataclasses
+import functools
 import math
 
 import numpy as np
@@ -97,9 +98,10 @@ def test_directional_light_in_a_bounded_box_matches_closed_form():
     assert np.all(true <= 1e-4 * exact)
 
 
-def _sphere_shadow_intervals(o, d, p, c, r, t0, t1, n=4000):
-    """Where the segment x(t) -> p passes through the sphere (c, r): sign changes of its distance to c minus r,
-    refined by brentq (independent of the reference's visibility bisection)."""
+def _sphere_shadow_edges(o, d, p, c, r, t0, t1, n=4000):
+    """``[t0, roots..., t1]``: the points where the segment x(t) -> p starts or stops passing through the sphere
+    (c, r), sign changes of its distance to c minus r refined by brentq (independent of the reference's visibility
+    bisection)."""
     def gap(t):
         x = o + t * d
         u = p - x
@@ -109,22 +111,28 @@ def _sphere_shadow_intervals(o, d, p, c, r, t0, t1, n=4000):
     gs = np.array([gap(t) for t in ts])
     roots = [optimize.brentq(gap, ts[i], ts[i + 1], xtol=1e-14, rtol=1e-15)
              for i in range(n - 1) if gs[i] * gs[i + 1] < 0]
-    edges = [t0] + roots + [t1]
+    return [t0] + roots + [t1], gap
+
+
+def _sphere_shadow_intervals(o, d, p, c, r, t0, t1, n=4000):
+    """The lit pieces of ``[t0, t1]`` (:func:`_sphere_shadow_edges`)."""
+    edges, gap = _sphere_shadow_edges(o, d, p, c, r, t0, t1, n)
     return [(edges[i], edges[i + 1]) for i in range(len(edges) - 1) if gap(0.5 * (edges[i] + edges[i + 1])) > 0]
 
 
-def test_sphere_shadow_boundaries_are_located():
+@functools.cache  # three tests share it (the brentq roots take seconds)
+def _sphere_case():
+    """A point light and a sphere casting a volumetric shadow: the scene, and per pixel ``(edges, lit)``: the
+    light's interval along the ray cut at every shadow boundary, and its lit pieces (:func:`_sphere_shadow_edges`)."""
     light = Light(type="point", position=(0.0, 4.0, 0.0), intensity=30.0, range=20.0,
                   shadows=ShadowSettings(filter="exact"))
     blocker = Sphere(center=(0.3, 2.4, 0.5), radius=0.6)
     m = Medium(scattering=0.1, absorption=0.02, anisotropy=0.2)
     scene = _scene(m, [light], [blocker], max_distance=20.0,
                    camera=CameraSettings(position=(0.0, 0.5, -8.0), look_at=(0.0, 1.2, 0.0), fov=40.0))
-    res = render_reference(scene)
     o, d = _rays(scene)
     p, c = np.array(light.position), np.array(blocker.center)
-    exact = np.zeros((H, W))
-    shadowed = 0
+    pixels = {}
     for y in range(H):
         for x in range(W):
             dd = d[y, x]
@@ -137,12 +145,47 @@ def test_sphere_shadow_boundaries_are_located():
             disc = bb * bb - (np.dot(oc, oc) - blocker.radius ** 2)
             if disc >= 0.0 and -bb - math.sqrt(disc) > 0.0:
                 b = min(b, -bb - math.sqrt(disc))
-            lit = _sphere_shadow_intervals(o, dd, p, c, blocker.radius, a, b)
-            shadowed += len(lit) > 1
-            exact[y, x] = sum(point_light_extinction(0.1, 0.12, 0.2, 30.0, tc, h, u, v) for u, v in lit)
-    assert shadowed > 5, "the scene must cast volumetric shadows across the image"
+            edges, _ = _sphere_shadow_edges(o, dd, p, c, blocker.radius, a, b)
+            pixels[y, x] = edges, _sphere_shadow_intervals(o, dd, p, c, blocker.radius, a, b)
+    return scene, pixels
+
+
+def _sphere_exact(scene, pixels):
+    o, d = _rays(scene)
+    light = scene.lights[0]
+    exact = np.zeros((H, W))
+    for (y, x), (_, lit) in pixels.items():
+        tc, h = closest_approach(o, d[y, x], np.array(light.position))
+        exact[y, x] = sum(point_light_extinction(0.1, 0.12, 0.2, 30.0, tc, h, u, v) for u, v in lit)
+    return exact
+
+
+def test_sphere_shadow_boundaries_are_located():
+    scene, pixels = _sphere_case()
+    res = render_reference(scene)
+    assert sum(len(lit) > 1 for _, lit in pixels.values()) > 5, "the scene must cast volumetric shadows"
+    exact = _sphere_exact(scene, pixels)
     true = _check_bound(res, exact, 1e-4)
     assert np.all(true <= 1e-4 * exact)
+
+
+@pytest.mark.parametrize("samples", [6, 16])
+def test_a_coarse_shadow_grid_splits_every_run_longer_than_its_spacing(samples):
+    """``shadow_samples``' stated resolution (docs/PHYSICS.md, "Shadow boundaries"): along a pixel ray whose lit
+    and shadowed runs are all longer than the grid spacing ``(light interval) / shadow_samples``, every boundary is
+    found, and the result is within its reported bound of the closed form (which stays within rel_tol)."""
+    scene, pixels = _sphere_case()
+    res = render_reference(scene, rel_tol=1e-6, shadow_samples=samples)
+    exact = _sphere_exact(scene, pixels)
+    resolved = shadowed = 0
+    for (y, x), (edges, _) in pixels.items():
+        if min(np.diff(edges)) <= (edges[-1] - edges[0]) / samples:
+            continue  # a run the grid may step over: the documented resolution limit
+        resolved += 1
+        shadowed += len(edges) > 2
+        assert res.stats["shadow_boundaries"][y, x] == len(edges) - 2
+        assert abs(res.inscatter[y, x, 0] - exact[y, x]) <= res.error[y, x] <= 1e-6 * res.inscatter[y, x, 0]
+    assert shadowed >= 4 and resolved >= H * W // 2, "the grid must resolve most pixels, shadowed ones among them"
 
 
 def test_zero_scattering_is_black_and_deterministic():

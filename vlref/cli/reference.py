@@ -18,6 +18,13 @@ from .progress_bar import StageBar
 HELP = "converged single-scattering reference with per-pixel error"
 
 
+def _grid_size(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, not {value}")
+    return value
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="vlref reference")
     add_scene_arguments(p, required=True)
@@ -25,6 +32,10 @@ def parser() -> argparse.ArgumentParser:
                    help="output folder for reference.exr/.png, inscatter.exr, error.exr (default: out_reference)")
     p.add_argument("--rel-tol", type=float, default=1e-4,
                    help="target relative error per pixel (default: 1e-4)")
+    p.add_argument("--shadow-samples", type=_grid_size, default=512, metavar="N",
+                   help="shadow-boundary grid per light and pixel: every lit or shadowed run along a pixel ray longer "
+                        "than its light interval / N is split at its exact boundaries (bisected to 1e-12 m); shorter "
+                        "ones are still integrated, but the error estimate may miss them (default: 512)")
     add_scheduler_argument(p)
     p.add_argument("--tile-rows", type=int, default=16, metavar="N",
                    help="with --scheduler: image rows per item; the result does not depend on it (default: 16)")
@@ -34,11 +45,13 @@ def parser() -> argparse.ArgumentParser:
 def run(args) -> int:
     scene = load_scene_checked(args)
     if args.scheduler:  # the cluster's own bar counts the tiles
-        res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows)
+        res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows,
+                                     shadow_samples=args.shadow_samples)
     else:
         with StageBar(False, 4, f"reference {Path(scene.source).stem}") as bar:  # 3 frame stages, then the quadrature
-            res = render_reference(scene, rel_tol=args.rel_tol, progress=bar.stage)
-    meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol)}
+            res = render_reference(scene, rel_tol=args.rel_tol, shadow_samples=args.shadow_samples, progress=bar.stage)
+    meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol),
+            "shadow_samples": str(args.shadow_samples)}
     exposure, png_meta, phrase = preview_exposure(scene, res.final)
     with output_dir(args.output) as out:
         write_exr(out / "reference.exr", res.final, metadata=meta)

@@ -36,11 +36,12 @@ by the mean error outside the zone (ground that shadows itself fails there). The
 comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
 take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
-reference is whichever of vlref's two decisions lies closest to the port's value. And a pixel whose vlref value
-moves by more than a quarter of the preset's per-pixel threshold under float32-sized changes of the port's
-inputs (:func:`rounding_spread`: its depths by 4 ulp, with the blur's reach; those nudges of the lights and maps)
-is in the zone too: its tolerance is the preset's edge tolerance plus that spread (``gpu-float32``, whose
-per-pixel bounds are float32's, relies on it; for the fp16 presets the spread is far below their bounds).
+reference is whichever of vlref's two decisions lies closest to the port's value. Every pixel may also differ by
+vlref's own spread under float32-sized changes of the port's inputs (:func:`_rounding_allowance`: twice the change
+when its depths move by 4 ulp, :func:`rounding_spread`, or the nudges' change), and a pixel where that spread is a
+sizeable share of the preset's per-pixel threshold is in the zone too, with the preset's edge tolerance
+(``gpu-float32``, whose per-pixel bounds are float32's, relies on it; for the fp16 presets the spread is far below
+their bounds).
 
 Degenerate comparisons fail: when vlref's render of the scene says a buffer carries light (the pass's
 buffer, or for the final frame the in-scatter, is nonzero somewhere), a comparison whose reference is zero
@@ -100,13 +101,29 @@ DEPTH_ROUNDING = 2.0 ** -21
 4 ulp, the bound of a reversed-Z decode ``f n / (d (f - n) + n)`` in float32 (four correctly rounded operations,
 0.5 ulp each, and a division, 2.5 ulp in Vulkan's precision rules); two decodes then differ by up to 8 ulp."""
 ROUNDING_ZONE = 0.25
-"""A pixel is sensitive to rounding when vlref's spread there exceeds this share of the preset's per-pixel
-threshold (:func:`_sensitive`): the spread is measured at 4 ulp of the depths and 1e-5 of the lights, a port
-rounds by less."""
-ROUNDING_REACH = 3
-"""The rounding zone takes the depth-sensitive pixels of every buffer of a size, grown by this many pixels: a later pass
-sums its taps' changes (the killzone's 7-tap blur, 3 each side), which the periodic patterns of
-:func:`rounding_patterns` can cancel where a port's roundings do not."""
+"""A pixel is sensitive to the depths' rounding when vlref's spread there (:func:`rounding_spread`) exceeds this share
+of the preset's per-pixel threshold (:func:`_rounding_allowance`)."""
+ROUNDING_REACH = 1
+"""The rounding zone takes the depth-sensitive pixels of every buffer of a size, grown by this many pixels: a pixel
+next to a sensitive one shares most of its taps, whose signs the eight patterns of :func:`rounding_patterns` may set
+so that their changes cancel where a port's roundings do not."""
+ROUNDING_SAFETY = 2.0
+"""A pixel may differ from vlref by this many times vlref's depth-rounding spread (on top of the preset's threshold):
+the eight sign patterns are eight of the 2^n ways n taps can round; a port's one way moves a pixel by at most
+ROUNDING_SAFETY x their largest change (measured: docs/PORTING.md, "The float32 rounding allowance")."""
+ROUNDING_PRESETS = 1e-3
+"""The depth-rounding spread (:func:`rounding_spread`, eight renders) is taken for passes whose preset's ``rel_tol`` is
+under this (float32's bounds): its largest measured value, ~20x float32's threshold (2e-3 relative, the WebGPU
+port's frames), is under the fp16 presets' per-pixel thresholds (``gpu-half`` 1e-2 relative, ``gpu-full`` 5e-3 plus
+a floor of 1e-3 of the mean level), whose fp16 stores dominate there. Nor is it taken for a
+depth buffer (``depth_*``: the camera depth min-downsampled), which the rounding moves by itself, 4 ulp: 5e-3 of
+float32's threshold."""
+KNIFE_ZONE = 1.0
+"""A pixel is knife-sensitive (in the rounding zone) when the knife-edge nudges move vlref's value by more than this
+share of the preset's threshold: the nudges' continuous change is a fifth of float32's threshold at the median pixel
+of the WebGPU port's frame (so a quarter, the depth's share, would take 42 % of the march texels), and beyond the
+whole threshold it is a decision (a march sample on a shadow-volume, texel or cone boundary), its blurred share, or a
+ray passing a point light within centimetres."""
 KNIFE_JUMP = 1e-3
 """A change 100x the nudge: a discrete decision taken the other way, not a continuous change."""
 MAP_JUMP = 5e-3
@@ -470,7 +487,7 @@ def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray
     ``z - z_k`` by up to 8 ulp of z (~1e-6 z) and the weight by up to ``1e-6 z / ε``, far over float32's 1e-4
     at 10 m, and the blur passes sum such changes over their taps."""
     spread: dict[str, np.ndarray] = {}
-    for signs in rounding_patterns(port.depth.shape):
+    for signs in rounding_patterns(port.depth):
         moved = dataclasses.replace(port, depth=port.depth * (1.0 + DEPTH_ROUNDING * signs))
         for name, a in technique.render(port.scene, port_frame(moved)).items():
             a, b = np.asarray(a), np.asarray(own.get(name))
@@ -483,14 +500,19 @@ def rounding_spread(port, frame_p, technique, own: dict) -> dict[str, np.ndarray
     return spread
 
 
-def rounding_patterns(shape: tuple[int, int]) -> list[np.ndarray]:
-    """Four (H, W) patterns of signs ±1: bit ``b`` of ``(x mod 4) + 4 (y mod 4)``. Two pixels less than 4 apart in
-    x and in y (the reach of the killzone's upsample and blur taps) differ in one of the bits, so some pattern
-    moves their depths in opposite directions (random patterns leave a pair on one side in all four with
-    probability 1/16)."""
-    y, x = np.indices(shape)
-    code = x % 4 + 4 * (y % 4)
-    return [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
+def rounding_patterns(depth: np.ndarray) -> list[np.ndarray]:
+    """Eight (H, W) patterns of signs ±1 keyed by the stored depth value: bit ``b`` of the rank of the pixel's depth
+    among the frame's distinct depths, modulo 16, and the four negated (a min-depth downsample picks another texel
+    only when the nearer of two depths moves away and the other closer: one direction of the pair). A port decodes
+    each stored value by one formula, so pixels of one stored depth round alike (a level camera sees a ground plane's
+    rows at one depth each: the bilateral taps along such a row are equally deep in any decode, and moving them
+    apart would invent the spread of a 1 mm guard at every ground pixel); two distinct depths less than 16 apart in
+    rank differ in one of the bits, so some pattern moves them in opposite directions, each way round."""
+    z = np.asarray(depth, dtype=np.float64)
+    _, rank = np.unique(np.where(np.isfinite(z), z, np.inf), return_inverse=True)
+    code = rank.reshape(z.shape) % 16
+    signs = [np.where((code >> b) & 1, 1.0, -1.0) for b in range(4)]
+    return signs + [-s for s in signs]
 
 
 def _either_decision(ref: np.ndarray, test: np.ndarray, knife) -> np.ndarray:
@@ -521,33 +543,39 @@ def _knife_spread(knife: dict) -> dict[str, np.ndarray]:
     return out
 
 
-def _sensitive(tol, ref: np.ndarray, spread: np.ndarray) -> np.ndarray:
-    """(h, w) bool: the finite pixels of ``ref`` (``(h, w, C)``) where ``spread`` exceeds ``ROUNDING_ZONE`` of the
-    preset's per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a channel."""
+def _sensitive(tol, ref: np.ndarray, spread: np.ndarray, share: float) -> np.ndarray:
+    """(h, w) bool: the finite pixels of ``ref`` (``(h, w, C)``) where ``spread`` exceeds ``share`` of the preset's
+    per-pixel threshold ``abs_tol · S + rel_tol · |ref|`` in a channel."""
     finite = np.isfinite(ref)
     compared = finite.all(axis=2)
     if not compared.any():
         return compared
     r = np.where(finite, ref, 0.0)
     s = scale_of(tol, r, compared)
-    return np.any(spread > ROUNDING_ZONE * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
+    return np.any(spread > share * (tol.abs_tol * s + tol.rel_tol * np.abs(r)), axis=2) & compared
 
 
-def _rounding_zone(tol, own: dict, rounding: dict, knife_spread: dict, buffer: str) -> np.ndarray:
-    """(h, w) bool: where float32 rounding of the port's inputs, not the pass, can decide whether a pixel of
-    ``buffer`` passes (the preset's edge tolerance applies there): its own pixels sensitive to the knife-edge
-    nudges (:func:`_sensitive`), and every pixel within ``ROUNDING_REACH`` of a pixel of some buffer of its size
-    sensitive to the depths' rounding (:func:`rounding_spread`)."""
+def _rounding_allowance(tol, own: dict, rounding: dict, knife_spread: dict, buffer: str):
+    """``(zone, widen)`` of ``buffer``: where float32 rounding of the port's inputs, not the pass, can decide whether
+    a pixel passes ((h, w) bool; the preset's edge tolerance applies there), and by how much vlref's value may move
+    ((h, w, C), :func:`_within`). The zone holds every pixel within ``ROUNDING_REACH`` of a pixel of some buffer of
+    its size whose depth-rounding spread (:func:`rounding_spread`) exceeds ``ROUNDING_ZONE`` of the threshold, and
+    the buffer's own pixels that the knife-edge nudges move by more than ``KNIFE_ZONE`` of it (a decision, or its
+    blurred share). Every pixel may move by ``ROUNDING_SAFETY`` times its depth spread or by the nudges' whole
+    change ``|hi - lo|``, whichever is larger: that change measures how a pixel's march amplifies the rounding of
+    positions (near a point light a float32 march errs by up to ~1e-4, as much as the nudges move it; elsewhere
+    the change is a fifth of float32's threshold)."""
     ref = _as_3d(own[buffer])
     shape = ref.shape[:2]
     depth = np.zeros(shape, bool)
     for name, d in rounding.items():
         if d.shape[:2] == shape:
-            depth |= _sensitive(tol, _as_3d(own[name]), d)
-    zone = dilate(depth, ROUNDING_REACH)
-    if buffer in knife_spread and knife_spread[buffer].shape == ref.shape:
-        zone |= _sensitive(tol, ref, knife_spread[buffer])
-    return zone
+            depth |= _sensitive(tol, _as_3d(own[name]), d, ROUNDING_ZONE)
+    zone = dilate(depth, ROUNDING_REACH) | _sensitive(tol, ref, knife_spread[buffer], KNIFE_ZONE)
+    widen = knife_spread[buffer]
+    if buffer in rounding and rounding[buffer].shape == ref.shape:
+        widen = np.maximum(widen, ROUNDING_SAFETY * rounding[buffer])
+    return zone, widen
 
 
 def _as_3d(a) -> np.ndarray:
@@ -577,8 +605,7 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
     zones: dict[int, np.ndarray] = memo.setdefault("zones", {})
     if "knife" not in memo:
         memo["knife"] = knife_edges(port, frame_p, technique)
-        memo["rounding"] = rounding_spread(port, frame_p, technique, own)
-    knife, rounding = memo["knife"], memo["rounding"]
+    knife = memo["knife"]
     knife_spread = _knife_spread(knife)
     out = []
     for k, p in enumerate(port.passes):
@@ -598,11 +625,14 @@ def _own_passes(port, frame_p, own: dict, preset: str, reference: dict, techniqu
         if fits and p.buffer in knife and knife[p.buffer][0].shape == ref.shape[:2]:
             ref = _either_decision(ref, p.image, knife[p.buffer])
             zone = zone | knife[p.buffer][0]
-        if fits and p.buffer in rounding and rounding[p.buffer].shape == ref.shape:
-            zone = zone | _rounding_zone(tol, own, rounding, knife_spread, p.buffer)
-            widen = rounding[p.buffer]
-            if p.buffer in knife_spread and knife_spread[p.buffer].shape == widen.shape:
-                widen = np.maximum(widen, knife_spread[p.buffer])
+        rounding = {}
+        if tol.rel_tol < ROUNDING_PRESETS and not p.buffer.startswith("depth"):
+            if "rounding" not in memo:
+                memo["rounding"] = rounding_spread(port, frame_p, technique, own)
+            rounding = memo["rounding"]
+        if fits and p.buffer in knife_spread and knife_spread[p.buffer].shape == ref.shape:
+            rounding_zone, widen = _rounding_allowance(tol, own, rounding, knife_spread, p.buffer)
+            zone = zone | rounding_zone
             ref = _within(ref, p.image, widen)
         mask = np.isfinite(ref).all(axis=2) if p.ignore_sky else None
         signal = p.buffer in reference and bool(np.any(np.asarray(reference[p.buffer]) != 0))

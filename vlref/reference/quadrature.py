@@ -42,19 +42,27 @@ import math
 import time
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numba import njit, prange
 
 from ..render import prepare_frame
 from . import integrand as ig
 from .integrand import WG, WGK, XGK
-from ..progress import row_bands
+from ..parallel import WORKERS, borrowed, take
+from ..progress import bands_for, row_bands
 
 __all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL"]
 
 DEFAULT_ABS_TOL = 1e-9
 
 ROUNDOFF = 50.0 * np.finfo(np.float64).eps
+
+# Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
+# visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
+# thread about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
+RAYS_BEYOND_GRID = 100
+RAYS_PER_BAND = 12_500
 
 
 @njit(cache=True, fastmath=False)
@@ -201,9 +209,37 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     return total, err + boundary_err, used, ok, n - n_geom
 
 
+@njit(cache=True, fastmath=False)
+def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
+                     out, trans, err, used, ok, shadow_edges):
+    """Take pixels (row-major index, :func:`vlref.parallel.take` on ``taken``) until none is left and solve each
+    one's integral (:func:`pixel_integral`) and view transmittance into the output arrays."""
+    h, w = t_end.shape
+    while True:
+        p = take(taken)
+        if p >= h * w:
+            return
+        y = p // w
+        x = p - y * w
+        ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
+        total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
+                                               max_intervals, max_splits)
+        out[y, x] = total
+        err[y, x] = e
+        used[y, x] = n
+        ok[y, x] = good
+        shadow_edges[y, x] = nb
+        trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
+
+
 @njit(cache=True, fastmath=False, parallel=True)
 def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
                       shadow_samples, max_intervals, max_splits):
+    """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over
+    :data:`~vlref.parallel.WORKERS` take pixels on demand (a pixel without shadow boundaries costs a few
+    dozen integrand evaluations, one crossing several shadows hundreds: ``prange``'s static split would
+    leave threads idle), with the arrays borrowed (:func:`vlref.parallel.borrowed`: no reference counts
+    on the records every shadow ray reads). Which thread solves a pixel changes no bit of it."""
     h, w = t_end.shape
     out = np.zeros((h, w, 3))
     trans = np.ones((h, w))
@@ -211,20 +247,14 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     used = np.zeros((h, w), dtype=np.int64)
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
-    for p in prange(h * w):
-        y = p // w
-        x = p - y * w
-        ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
-        # assembled per pixel: Numba's parfor cannot pass nested tuples in
-        ctx = ig.ReferenceContext(geo, lights, shadows, medium, light_extinction, bounded)
-        total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
-                                           max_intervals, max_splits)
-        out[y, x] = total
-        err[y, x] = e
-        used[y, x] = n
-        ok[y, x] = good
-        shadow_edges[y, x] = nb
-        trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
+                                                    (out, trans, err, used, ok, shadow_edges)))
+        # assembled in the loop's body: Numba's parfor cannot pass nested tuples in
+        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded)
+        _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
+                         res[0], res[1], res[2], res[3], res[4], res[5])
     return out, trans, err, used, ok, shadow_edges
 
 
@@ -258,11 +288,14 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
 
     ``rel_tol``: target error relative to the pixel's brightest inscatter channel;
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
-    ``progress``: optional callable receiving stage names; ``shadow_samples``: visibility grid
-    size per light and pixel; ``max_intervals``: adaptive budget per pixel; ``rows``: only the image
+    ``progress``: optional callable receiving stage names; ``shadow_samples`` (>= 1): visibility grid
+    size per light and pixel (step 2 of the module docstring: runs longer than the light's interval along the
+    ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``: adaptive budget per pixel; ``rows``: only the image
     rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
     image bit for bit; :mod:`vlref.reference.tiles`).
     """
+    if int(shadow_samples) < 1:
+        raise ValueError(f"render_reference: shadow_samples must be at least 1, not {shadow_samples}")
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
     scene = frame.scene  # evaluated at render.frame (animated scenes)
@@ -274,10 +307,12 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     ctx = ig.build_context(scene, frame)
     origin = np.asarray(cam.position, dtype=np.float64)
     max_splits = ig.max_split_points(ctx, shadow_samples)
-    # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands); pixels are independent
+    # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), sized by their shadow rays; pixels are
+    # independent
+    work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID) * max(1, len(scene.lights))
     bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx, float(rel_tol), float(abs_tol),
                                int(shadow_samples), int(max_intervals), max_splits)
-             for y0, y1 in row_bands(t_end.shape[0])]
+             for y0, y1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
     inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
     if progress is not None:
         progress("reference")
