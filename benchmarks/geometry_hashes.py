@@ -1,4 +1,4 @@
-"""SHA-256 of every G-buffer and shadow-map array of the geometry scenes, to show that a change of the ray
+"""SHA-256 of every G-buffer and shadow-map array (and the scene colour) of the geometry scenes, to show that a change of the ray
 casting or of the BVH keeps the bits (BENCHMARKS.md, "Whole frame").
 
 Scenes: the bench scene (b) with four shadowed lights, and the bundled scenes whose geometry or maps exercise
@@ -23,6 +23,7 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry, raycast, trace_distances
 from vlref.lights import pack_lights
 from vlref.lights.pack import I_KIND
+from vlref.lights.shading import scene_colour
 from vlref.lights.shadow_cast import build_shadow_maps
 from vlref.lights.shadow_pack import SHADOW_HARD, SHADOW_PCF
 from vlref.lights.shadow_probes import cast_rays, lit_at_points
@@ -30,6 +31,7 @@ from vlref.scene.load import load_scene
 
 SCENES = ("stained_glass", "window", "cage", "forest", "coloured_lights", "valley")
 SIZE = ("render.width=320", "render.height=180")
+GBUFFER = ("depth", "distance", "position", "normal", "albedo", "emission", "object_id")  # stored or derived
 
 
 def _digest(array: np.ndarray) -> str:
@@ -43,7 +45,8 @@ def hashes(scene) -> dict:
     packed = pack_lights(scene)
     gbuffer = raycast(scene, camera, geometry)
     maps = build_shadow_maps(scene, camera, geometry, packed)
-    out = {f"gbuffer.{k}": _digest(getattr(gbuffer, k)) for k in gbuffer.__dataclass_fields__}
+    out = {f"gbuffer.{k}": _digest(getattr(gbuffer, k)) for k in GBUFFER}
+    out["scene_colour"] = _digest(scene_colour(gbuffer, scene, geometry, packed))
     out["maps.data"], out["maps.tint"] = _digest(maps.data), _digest(maps.tint)
     rng = np.random.default_rng(7)
     lo, hi = geometry.bounds_min - 2.0, geometry.bounds_max + 2.0

@@ -60,14 +60,13 @@ def main(width=480, height=270, res=512):
     origin = np.ascontiguousarray(camera.position, dtype=np.float64)
     n = width * height
     buf = GBuffer(depth=np.empty((height, width)), distance=np.empty((height, width)),
-                  position=np.zeros((height, width, 3)), normal=np.zeros((height, width, 3)),
-                  albedo=np.zeros((height, width, 3)), emission=np.zeros((height, width, 3)),
-                  object_id=np.empty((height, width), dtype=np.int32))
+                  normal=np.zeros((height, width, 3)), object_id=np.empty((height, width), dtype=np.int32),
+                  origin=origin, directions=dirs, object_albedo=geo.albedo, object_emission=geo.emission)
     rows = {
         "raycast (buffers allocated)": lambda: raycast(scene, camera, geometry),
         "raycast kernel (buffers reused)": lambda: _raycast_kernel(
             geo, origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth,
-            buf.distance, buf.position, buf.normal, buf.albedo, buf.emission, buf.object_id),
+            buf.distance, buf.normal, buf.object_id),
         "closest_hits only": lambda: _hits_only(geo, origin, dirs, tmax),
     }
     print(f"bench scene (b) {width}x{height}, {n} rays; ns per ray: wall / CPU")

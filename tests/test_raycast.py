@@ -59,6 +59,8 @@ def test_plane_sphere_depth_matches_analytic(far):
     assert np.all(gb.depth[hit] <= far * (1 + 1e-12))
     assert np.all(np.isinf(gb.depth[~hit])) and np.all(np.isinf(gb.distance[~hit]))
     assert np.allclose(gb.position[hit], (cam.position + t[..., None] * d)[hit], atol=1e-10)
+    # position is derived from what the kernel stores, o + t d with the stored t, bit for bit
+    assert np.array_equal(gb.position[hit], (cam.position + gb.distance[..., None] * d)[hit])
     assert np.allclose(gb.normal, n, atol=1e-10)
     mats = np.array([[0.2, 0.3, 0.4], [0.9, 0.5, 0.1], [0.0, 0.0, 0.0]])
     assert np.array_equal(gb.albedo, mats[ids])

@@ -156,9 +156,9 @@ def _bare(scene, maps: bool = False):
 
 def _sky_gbuffer() -> GBuffer:
     """A 1×1 G-buffer that sees the sky, built without the ray cast's kernel (the arrays it allocates)."""
-    return GBuffer(depth=np.full((1, 1), np.inf), distance=np.full((1, 1), np.inf), position=np.zeros((1, 1, 3)),
-                   normal=np.zeros((1, 1, 3)), albedo=np.zeros((1, 1, 3)), emission=np.zeros((1, 1, 3)),
-                   object_id=np.full((1, 1), -1, dtype=np.int32))
+    return GBuffer(depth=np.full((1, 1), np.inf), distance=np.full((1, 1), np.inf), normal=np.zeros((1, 1, 3)),
+                   object_id=np.full((1, 1), -1, dtype=np.int32), origin=np.zeros(3), directions=np.zeros((1, 1, 3)),
+                   object_albedo=np.zeros((0, 3)), object_emission=np.zeros((0, 3)))
 
 
 def compile_stage(stage: str, scene) -> None:

@@ -359,7 +359,7 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
     ox, oy, oz, dx, dy, dz = ray
     best, found = tmax, -1
     nodes, stack_t = stack
-    top, node = 0, 0
+    top, node = np.int64(0), np.int64(0)  # typed int64 from the start: see prims_closest
     while True:
         if node_count[node] > 0:
             first = node_first[node]
@@ -410,7 +410,7 @@ def bvh_transmittance(node_min, node_max, node_first, node_count, v0, e1, e2, tr
     hit_t = np.empty(DEDUP)
     n_hits = 0
     nodes[0] = 0
-    top = 1
+    top = np.int64(1)
     while True:
         node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
                               nodes, top)

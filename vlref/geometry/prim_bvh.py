@@ -63,7 +63,9 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
         return best, best_k, nx, ny, nz
     ox, oy, oz, dx, dy, dz = ray
     nodes, stack_t = stack
-    top, node = 0, 0
+    # int64 from the start: a literal 0 types the first call of descend/pop_nearer with Literal[int](0) before the
+    # loop's int64 is known, and Numba compiles the helpers twice (once per type)
+    top, node = np.int64(0), np.int64(0)
     while True:
         if node_count[node] > 0:
             first = node_first[node]
@@ -92,7 +94,7 @@ def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row,
     ox, oy, oz, dx, dy, dz = ray
     nodes = stack[0]
     nodes[0] = 0
-    top = 1
+    top = np.int64(1)
     while True:
         node, top = next_leaf(node_min, node_max, node_first, node_count, ox, oy, oz, ix, iy, iz, tmin, tmax,
                               nodes, top)

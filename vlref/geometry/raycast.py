@@ -12,16 +12,25 @@ the camera, ``albedo``/``emission`` of object ``k``, ``object_id = k``. Sky pixe
 together by :func:`~vlref.geometry.scene_geometry.closest_hits`), so the buffers are bit-identical for any thread
 count.
 
-Performance (BENCHMARKS.md, "Ray casting: the query inlined, the arrays borrowed, rows on demand"): rows are handed
-out to the threads on demand (:func:`vlref.parallel.take`; sky rows cost next to nothing, so ``prange``'s equal
-blocks would leave threads idle), and the workers get every array without reference counts
-(:func:`vlref.parallel.borrowed`). At 1080p on 16 cores the kernel casts ~107 M rays/s; ``raycast`` as a whole
-~80 M rays/s, the difference being the first touch of the 116 bytes per pixel of new buffers.
+Stored and derived buffers: the kernel writes ``depth``, ``distance``, ``normal`` and ``object_id`` (44 bytes a
+pixel); ``position``, ``albedo`` and ``emission`` are derived on first use from what is stored (the camera's
+origin and ray directions, the objects' materials), with the same operations and so the same bits as if the
+kernel had written them. A consumer in a kernel computes them in place (:func:`vlref.lights.shading.scene_colour`
+reads ``o + t d`` and the object's albedo and emission: no (H, W, 3) array of them is ever built for shading).
+
+Performance (BENCHMARKS.md, "Ray casting: the query inlined, the arrays borrowed, rows on demand" and "The
+G-buffer's bytes"): rows are handed out to the threads on demand (:func:`vlref.parallel.take`; sky rows cost next
+to nothing, so ``prange``'s equal blocks would leave threads idle), and the workers get every array without
+reference counts (:func:`vlref.parallel.borrowed`). A fresh G-buffer costs the first touch of its new pages (the OS
+zeroes each one), which is why only 44 of the former 116 bytes a pixel are written: at 1080p on 16 cores ``raycast``
+casts ~118 M rays/s, the kernel on buffers allocated once ~137 M (one device machine; another measured 74-80 M for
+``raycast``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numba import njit, prange
@@ -30,32 +39,57 @@ from ..camera import Camera
 from ..parallel import WORKERS, borrowed, take
 from ..scene.model import Scene
 from .bvh import traversal_stack
-from .scene_geometry import Geometry, build_geometry, closest_hits
+from .scene_geometry import OPAQUE_ONLY, Geometry, build_geometry, closest_hits
 
 __all__ = ["GBuffer", "raycast"]
 
 
 @dataclass(frozen=True)
 class GBuffer:
-    """Primary-ray buffers, all (H, W[, 3]) float64 except ``object_id`` (H, W) int32 (module docstring)."""
+    """Primary-ray buffers (module docstring). Stored: ``depth``, ``distance`` (H, W) float64, ``normal``
+    (H, W, 3) float64, ``object_id`` (H, W) int32 (-1: sky); what the derived buffers are computed from:
+    ``origin`` (3,) the rays' origin, ``directions`` (H, W, 3) their unit directions (read only, may be the
+    camera's own array), ``object_albedo``/``object_emission`` (M, 3) per object. Derived on first use, (H, W, 3)
+    float64, 0 on sky: ``position``, ``albedo``, ``emission``."""
 
     depth: np.ndarray
     distance: np.ndarray
-    position: np.ndarray
     normal: np.ndarray
-    albedo: np.ndarray
-    emission: np.ndarray
     object_id: np.ndarray
+    origin: np.ndarray
+    directions: np.ndarray
+    object_albedo: np.ndarray
+    object_emission: np.ndarray
 
     @property
     def hit(self) -> np.ndarray:
         """(H, W) bool: the pixel sees a surface."""
         return self.object_id >= 0
 
+    @cached_property
+    def position(self) -> np.ndarray:
+        """(H, W, 3) ``origin + distance · direction`` where a surface is seen, else 0."""
+        hit = self.hit[..., None]
+        return np.where(hit, self.origin + np.where(hit, self.distance[..., None], 0.0) * self.directions, 0.0)
+
+    @cached_property
+    def albedo(self) -> np.ndarray:
+        """(H, W, 3) the seen object's albedo, 0 on sky."""
+        return _per_object(self.object_albedo, self.object_id)
+
+    @cached_property
+    def emission(self) -> np.ndarray:
+        """(H, W, 3) the seen object's emission, 0 on sky."""
+        return _per_object(self.object_emission, self.object_id)
+
+
+def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
+    """(H, W, 3): row ``object_id`` of the (M, 3) ``table`` per pixel, 0 where ``object_id`` is -1."""
+    return np.concatenate([table, np.zeros((1, 3))])[object_id]
+
 
 @njit(cache=True, fastmath=False)
-def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
-               object_id):
+def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, object_id):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
     (:func:`closest_hits`), then its G-buffer pixels written (module docstring)."""
     h, w = depth.shape
@@ -63,7 +97,6 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
     if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
         return
     ox, oy, oz = origin[0], origin[1], origin[2]
-    obj_albedo, obj_emission = geo.albedo, geo.emission
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
     t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
     stack = traversal_stack()
@@ -73,9 +106,8 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
         for x in range(w):  # the ray's end on the far plane
             cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
             tmax[x] = far / cos_f[x]
-        closest_hits(geo, origins, dirs[y], tmax, True, stack, t_row, obj_row, n_row)
+        closest_hits(geo, origins, dirs[y], tmax, OPAQUE_ONLY, stack, t_row, obj_row, n_row)
         for x in range(w):  # the surface each ray sees
-            dx, dy, dz = dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2]
             t, obj = t_row[x], obj_row[x]
             object_id[y, x] = obj
             if obj < 0:
@@ -84,24 +116,18 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, position
                 continue
             depth[y, x] = t * cos_f[x]
             distance[y, x] = t
-            position[y, x, 0], position[y, x, 1], position[y, x, 2] = ox + t * dx, oy + t * dy, oz + t * dz
             normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = n_row[x, 0], n_row[x, 1], n_row[x, 2]
-            for c in range(3):
-                albedo[y, x, c] = obj_albedo[obj, c]
-                emission[y, x, c] = obj_emission[obj, c]
         y = take(taken)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, position, normal, albedo, emission,
-                    object_id):
+def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, normal, object_id):
     """The G-buffer: every worker casts the rows it takes (:func:`_cast_rows`) on borrowed arrays (module
     docstring, "Performance")."""
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        g, o, d, f, db, ds, p, n, a, e, ids = borrowed((geo, origin, dirs, forward, depth, distance, position, normal,
-                                                        albedo, emission, object_id))
-        _cast_rows(taken, g, o, d, f, far, db, ds, p, n, a, e, ids)
+        g, o, d, f, db, ds, n, ids = borrowed((geo, origin, dirs, forward, depth, distance, normal, object_id))
+        _cast_rows(taken, g, o, d, f, far, db, ds, n, ids)
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
@@ -116,10 +142,10 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
     geo = (build_geometry(scene) if geometry is None else geometry).arrays
     h, w = camera.height, camera.width
     dirs = np.ascontiguousarray(camera.ray_directions(copy=False))  # read only: the camera's own array
-    buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), position=np.zeros((h, w, 3)),
-                  normal=np.zeros((h, w, 3)), albedo=np.zeros((h, w, 3)), emission=np.zeros((h, w, 3)),
-                  object_id=np.empty((h, w), dtype=np.int32))
-    _raycast_kernel(geo, np.ascontiguousarray(camera.position, dtype=np.float64), dirs,
-                    np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far),
-                    buf.depth, buf.distance, buf.position, buf.normal, buf.albedo, buf.emission, buf.object_id)
+    buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), normal=np.zeros((h, w, 3)),
+                  object_id=np.empty((h, w), dtype=np.int32),
+                  origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
+                  object_albedo=geo.albedo, object_emission=geo.emission)
+    _raycast_kernel(geo, buf.origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64),
+                    float(camera.far), buf.depth, buf.distance, buf.normal, buf.object_id)
     return buf

@@ -64,12 +64,17 @@ from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_
                          pack_plane, pack_sphere, triangle_normal)
 
 __all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance",
-           "trace_distances", "SHADOW_EPS", "RAY_CHUNK"]
+           "trace_distances", "SHADOW_EPS", "RAY_CHUNK", "OPAQUE_ONLY", "EVERY_SURFACE"]
 
 SHADOW_EPS = 1e-6
 """Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
 
 INF = np.inf
+
+OPAQUE_ONLY, EVERY_SURFACE = np.bool_(True), np.bool_(False)
+"""``opaque_only`` of :func:`closest_hits` for compiled callers: NumPy bools, which Numba types as ``bool``. A Python
+``True`` or ``False`` is typed ``Literal[bool](True)`` or ``(False)``, and each literal compiles the query (inlined
+traversal and all) once more."""
 
 GeoArrays = namedtuple("GeoArrays", ["prim_kind", "prim_obj", "prim_row", "lin_prims", "pnode_min", "pnode_max",
                                      "pnode_first", "pnode_count", "pnode_prims", "albedo", "emission",
@@ -190,7 +195,7 @@ def _closest(lin, kind, row, prim_obj, opacity, pnode_min, pnode_max, pnode_firs
              node_min, node_max, node_first, node_count, v0, e1, e2, tri_opaque, tri_obj,
              ox, oy, oz, dx, dy, dz, tmin, tmax, opaque_only, stack):
     """:func:`closest_hit` on the geo tuple's arrays (the fields of the same names)."""
-    best, best_k, nx, ny, nz = tmax, -1, 0.0, 0.0, 0.0
+    best, best_k, nx, ny, nz = tmax, np.int64(-1), 0.0, 0.0, 0.0  # int64, not Literal[int](-1): one prims_closest
     for j in range(lin.shape[0]):
         k = lin[j]
         if opaque_only and opacity[prim_obj[k]] < 1.0:

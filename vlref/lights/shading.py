@@ -28,8 +28,9 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..geometry import shadow_transmittance
+from ..geometry import shadow_transmittance, traversal_stack
 from ..numeric import cast
+from ..parallel import WORKERS, borrowed, take
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
 from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
@@ -107,44 +108,72 @@ def light_incidence(lights, k, x, y, z):
     return lx, ly, lz, dist, er, eg, eb
 
 
-@njit(cache=True, fastmath=False, parallel=True)
-def _shade(geo, lights, strength, position, normal, albedo, emission, hit, ambient, sky, out):
-    h, w = hit.shape
+@njit(cache=True, fastmath=False)
+def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
+                ambient, sky, out):
+    """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left, each pixel's scene colour
+    (module docstring) computed from the G-buffer's stored buffers: the surface point ``o + t d`` and the object's
+    albedo and emission computed where they are read (the bits of the G-buffer's derived ``position``, ``albedo``
+    and ``emission``); one traversal stack for all of a worker's shadow rays."""
+    h, w = object_id.shape
+    y = take(taken)
+    if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
+        return
     inv_pi = 1.0 / math.pi
-    for p in prange(h * w):
-        i, j = p // w, p % w
-        if not hit[i, j]:
-            out[i, j, 0], out[i, j, 1], out[i, j, 2] = sky[0], sky[1], sky[2]
-            continue
-        nx, ny, nz = normal[i, j, 0], normal[i, j, 1], normal[i, j, 2]
-        x = position[i, j, 0] + SURFACE_OFFSET * nx
-        y = position[i, j, 1] + SURFACE_OFFSET * ny
-        z = position[i, j, 2] + SURFACE_OFFSET * nz
-        sr, sg, sb = 0.0, 0.0, 0.0
-        for k in range(lights.ints.shape[0]):
-            lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, y, z)
-            cos_n = nx * lx + ny * ly + nz * lz
-            if cos_n <= 0.0 or er + eg + eb == 0.0:
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    stack = traversal_stack()
+    while y < h:
+        for j in range(w):
+            obj = object_id[y, j]
+            if obj < 0:
+                out[y, j, 0], out[y, j, 1], out[y, j, 2] = sky[0], sky[1], sky[2]
                 continue
-            vr, vg, vb = 1.0, 1.0, 1.0
-            if strength[k] > 0.0:   # strength 0: no shadow (shadows absent, disabled or of no strength)
-                vr, vg, vb = shadow_transmittance(geo, x, y, z, lx, ly, lz, dist)
-                if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
-                    vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
-            sr += er * cos_n * vr
-            sg += eg * cos_n * vg
-            sb += eb * cos_n * vb
-        for c, s in enumerate((sr, sg, sb)):
-            out[i, j, c] = albedo[i, j, c] * (s * inv_pi + ambient[c]) + emission[i, j, c]
+            t = distance[y, j]
+            nx, ny, nz = normal[y, j, 0], normal[y, j, 1], normal[y, j, 2]
+            x = (ox + t * dirs[y, j, 0]) + SURFACE_OFFSET * nx
+            yy = (oy + t * dirs[y, j, 1]) + SURFACE_OFFSET * ny
+            z = (oz + t * dirs[y, j, 2]) + SURFACE_OFFSET * nz
+            sr, sg, sb = 0.0, 0.0, 0.0
+            for k in range(lights.ints.shape[0]):
+                lx, ly, lz, dist, er, eg, eb = light_incidence(lights, k, x, yy, z)
+                cos_n = nx * lx + ny * ly + nz * lz
+                if cos_n <= 0.0 or er + eg + eb == 0.0:
+                    continue
+                vr, vg, vb = 1.0, 1.0, 1.0
+                if strength[k] > 0.0:   # strength 0: no shadow (shadows absent, disabled or of no strength)
+                    vr, vg, vb = shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist, stack)
+                    if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
+                        vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
+                sr += er * cos_n * vr
+                sg += eg * cos_n * vg
+                sb += eb * cos_n * vb
+            for c, s in enumerate((sr, sg, sb)):
+                out[y, j, c] = obj_albedo[obj, c] * (s * inv_pi + ambient[c]) + obj_emission[obj, c]
+        y = take(taken)
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky,
+           out):
+    """The scene colour: every worker shades the rows it takes (:func:`_shade_rows`) on borrowed arrays (as the
+    G-buffer's ray cast does, :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads
+    counting references to the same geometry arrays on every shadow ray contend for their counters)."""
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        g, li, st, o, d, ds, n, ids, a, e, am, sk, c = borrowed((geo, lights, strength, origin, dirs, distance, normal,
+                                                                 object_id, obj_albedo, obj_emission, ambient, sky,
+                                                                 out))
+        _shade_rows(taken, g, li, st, o, d, ds, n, ids, a, e, am, sk, c)
 
 
 def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
-    out = np.empty(gbuffer.albedo.shape)
+    out = np.empty(gbuffer.normal.shape)
     strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 0.0
                          for li in scene.lights], dtype=np.float64)
-    _shade(geometry.arrays, lights, strength, gbuffer.position, gbuffer.normal, gbuffer.albedo, gbuffer.emission,
-           gbuffer.object_id >= 0, np.asarray(scene.render.ambient, dtype=np.float64),
-           np.asarray(scene.render.sky_color, dtype=np.float64), out)
+    _shade(geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
+           gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
+           np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),
+           out)
     return out

@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
-from ..geometry import RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
+from ..geometry import EVERY_SURFACE, OPAQUE_ONLY, RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
 from ..parallel import WORKERS, borrowed, take
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_POINT, KIND_SPOT, PackedLights)
@@ -112,12 +112,12 @@ def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out,
         for j in range(m):
             (origins[j, 0], origins[j, 1], origins[j, 2], dirs[j, 0], dirs[j, 1], dirs[j, 2], start[j],
              tmax[j]) = _face_ray(face, ortho, res, s + j)
-        closest_hits(geo, origins[:m], dirs[:m], tmax[:m], True, stack, t[:m], obj[:m], normal[:m])
+        closest_hits(geo, origins[:m], dirs[:m], tmax[:m], OPAQUE_ONLY, stack, t[:m], obj[:m], normal[:m])
         biased_distances(t[:m], obj[:m], normal[:m], dirs[:m], start[:m], bias, slope_bias, out[s:s + m])
         if want_tint:
             for j in range(m):
                 end[j] = min(t[j], tmax[j])
-            closest_hits(geo, origins[:m], dirs[:m], end[:m], False, stack, tt[:m], tobj[:m], normal[:m])
+            closest_hits(geo, origins[:m], dirs[:m], end[:m], EVERY_SURFACE, stack, tt[:m], tobj[:m], normal[:m])
             for j in range(m):
                 k = s + j
                 if tobj[j] < 0:

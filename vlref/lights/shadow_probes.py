@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from ..geometry import RAY_CHUNK, closest_hits, traversal_stack
+from ..geometry import OPAQUE_ONLY, RAY_CHUNK, closest_hits, traversal_stack
 from .shadow_cast import biased_distances
 from .shadow_lookup import map_lit
 
@@ -38,7 +38,7 @@ def _cast_rays(geo, origins, dirs, start, tmax, bias, slope_bias, out):
         m = e - s
         stack = traversal_stack()
         t, obj, normal = np.empty(m), np.empty(m, dtype=np.int64), np.empty((m, 3))
-        closest_hits(geo, origins[s:e], dirs[s:e], tmax[s:e], True, stack, t, obj, normal)
+        closest_hits(geo, origins[s:e], dirs[s:e], tmax[s:e], OPAQUE_ONLY, stack, t, obj, normal)
         biased_distances(t, obj, normal, dirs[s:e], start[s:e], bias, slope_bias, out[s:e])
 
 

@@ -31,9 +31,8 @@ def port_frame(port: PortBuffers):
     dirs = cam.ray_directions()
     distance = cam.eye_depth_to_distance(port.depth, dirs)
     hit = np.isfinite(port.depth)
-    position = np.where(hit[..., None], cam.position + dirs * np.where(hit, distance, 0.0)[..., None], 0.0)
-    zeros = np.zeros(port.depth.shape + (3,))
-    gbuffer = GBuffer(port.depth, distance, position, zeros, zeros, zeros, np.where(hit, 0, -1).astype(np.int32))
+    gbuffer = GBuffer(port.depth, distance, np.zeros(port.depth.shape + (3,)), np.where(hit, 0, -1).astype(np.int32),
+                      np.asarray(cam.position, dtype=np.float64), dirs, np.zeros((1, 3)), np.zeros((1, 3)))
     maps = shadow_maps_from_port(port.scene, cam, port.shadow_maps, port.source)
     return Frame(port.scene, cam, build_geometry(port.scene), gbuffer, pack_lights(port.scene), port.colour,
                  shadow_cache=maps)
