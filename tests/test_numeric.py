@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, strategies as st
 from numba import njit
 
-from vlref.numeric import arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, prefer_wide_vectors
+from vlref.numeric import arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, is_float64, prefer_wide_vectors
 
 
 @njit(cache=True)
@@ -71,6 +71,21 @@ def test_float32_arguments_give_the_rounded_float64_value():
 def test_cast_keeps_the_float_type():
     assert cast(np.float32(1.0), 2.5) == np.float32(2.5) and isinstance(cast(np.float32(1.0), 2.5), np.float32)
     assert isinstance(cast(1.0, 2), float)
+
+
+@njit(fastmath=False)  # not cached: Numba inspects only code it compiled in this process
+def _float64_only_shortcut(a):
+    return a[0] if is_float64(a) else math.sqrt(a[0])
+
+
+def test_is_float64_is_a_constant_of_each_compile():
+    """True for a float64 array, False for float32, in Python and in njit code, where it is a constant: the
+    float64 compile keeps no trace of the other branch (no square root), the float32 compile keeps it."""
+    a64, a32 = np.array([4.0]), np.array([4.0], np.float32)
+    assert is_float64(a64) and not is_float64(a32)
+    assert _float64_only_shortcut(a64) == 4.0 and _float64_only_shortcut(a32) == 2.0
+    ir = {sig[0].dtype.name: text for sig, text in _float64_only_shortcut.inspect_llvm().items()}
+    assert "sqrt" not in ir["float64"] and "sqrt" in ir["float32"]
 
 
 @njit(cache=True)

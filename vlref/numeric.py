@@ -33,7 +33,7 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic, overload
 
-__all__ = ["cast", "zero_one", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
+__all__ = ["cast", "zero_one", "is_float64", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
            "glibc_exp"]
 
 
@@ -71,6 +71,21 @@ def _zero_one_impl(like):
     if like.dtype == types.float32:
         return lambda like: (np.float32(0.0), np.float32(1.0))
     return lambda like: (np.float64(0.0), np.float64(1.0))
+
+
+def is_float64(like):
+    """Whether the array ``like`` holds float64 values. Inside njit code a constant of the compile (each precision
+    compiles its own), so a kernel can take a float64-only shortcut with no run-time branch."""
+    return np.asarray(like).dtype == np.float64
+
+
+@overload(is_float64)
+def _is_float64_impl(like):
+    if not isinstance(like, types.Array) or not isinstance(like.dtype, types.Float):
+        return None
+    if like.dtype == types.float64:
+        return lambda like: True
+    return lambda like: False
 
 
 @intrinsic

@@ -105,7 +105,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..lights.attenuation import UNITY, analytic_attenuation, distance_attenuation
-from ..lights.cone import CONE_LINEAR, cone_falloff, cone_polynomial
+from ..lights.cone import CONE_LINEAR, CONE_UNITY, cone_falloff, cone_polynomial
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
@@ -118,7 +118,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
-from ..numeric import arrays_do_not_overlap, cast, exp, expm1, prefer_wide_vectors, zero_one
+from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
 from ..parallel import WORKERS, borrowed, take
 from ..phase import hg
 from .segments import light_segment
@@ -130,7 +130,7 @@ TILE_W, TILE_H = 8, 16  # a task: a tile of TILE_W x TILE_H pixels, two packets 
 
 # The packet's scratch (module docstring, "Lanes"): lane m of row R is scratch[R + m]. A row named for a
 # vector or a colour is the first of three consecutive rows, (x, y, z) or (r, g, b).
-ROWS = 34
+ROWS = 35
 R_START = 0 * LANES  # a, the segment's start
 R_DELTA = 1 * LANES  # b, the segment's end, until _setup replaces it by the step Δ = (b - a)/N
 R_BETA = 2 * LANES  # β, the pixel's sample offset in [0, 1)
@@ -153,6 +153,7 @@ R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
 R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
 R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
 R_L = 31 * LANES  # (3) L, the radiance scattered toward the eye so far
+R_COS = 34 * LANES  # cos θ = -l · (the spot's axis), the cone's argument
 # float64 rows of a PCF map lookup (as map_lit computes them): the sample's map coordinates (u, v; cascades only)
 # and depth, whether the map covers it (in front of a spot light, on a cube face, inside a cascade), the four texel
 # weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
@@ -192,6 +193,16 @@ def scatters_light(ss, er, eg, eb):
     """The sample scatters light of this light: ``σs > 0`` and ``E_l ≠ 0`` (no shadow lookup elsewhere)."""
     zero = cast(ss, 0.0)
     return ss > zero and er + eg + eb > zero
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
+def reuses_distance(s):
+    """Whether a map lookup takes the sample's distance to a spot or point light (the map depth ``d_ref``) from the
+    light stage's ``R_DIST`` instead of its own square root: in float64 (a constant of the compile,
+    :func:`vlref.numeric.is_float64`), where both are ``sqrt(wx² + wy² + wz²)`` of the same float64 ``w = ±(x - p)``
+    (a negation is exact), summed in the same order: the same bits. In float32 the light stage computes in float32
+    and the map in float64, so each keeps its own."""
+    return is_float64(s)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
@@ -328,10 +339,18 @@ def _light_stage(s, n, lights, k):
                     set_lane(s, R_E, m, lane(s, R_E, m) * cone_falloff(cone, cos_t, co, ci, half_outer, half_inner,
                                                                        ua, ub))
             else:
+                falloff = 0  # lanes in the smoothstep's falloff, co < cos θ < ci (or NaN): only they need the division
                 for m in range(n):
                     lx, ly, lz = lane3(s, R_TO_LIGHT, m)
                     cos_t = -(lx * ax + ly * ay + lz * az)
-                    set_lane(s, R_E, m, lane(s, R_E, m) * cone_polynomial(cone, cos_t, co, ci, ua, ub))
+                    set_lane(s, R_COS, m, cos_t)
+                    falloff += not (cos_t <= co or cos_t >= ci)
+                if cone == CONE_UNITY or falloff > 0:
+                    for m in range(n):
+                        set_lane(s, R_E, m, lane(s, R_E, m) * cone_polynomial(cone, lane(s, R_COS, m), co, ci, ua, ub))
+                else:  # cone_polynomial's value without its division, which no lane needs: 0 or 1, the same product
+                    for m in range(n):
+                        set_lane(s, R_E, m, lane(s, R_E, m) * (zero if lane(s, R_COS, m) <= co else one))
     cr, cg, cb = lf[k, F_CR], lf[k, F_CG], lf[k, F_CB]
     for m in range(n):  # the colour
         e = lane(s, R_E, m)
@@ -376,8 +395,10 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _spot_texels(s, q, taps, n, lf, k, res):
     """Where the samples fall in spot light ``k``'s map of ``res``² texels: depth, in front of the light
-    (:func:`~vlref.lights.shadow_lookup.spot_map_coords`), the texels around ``(u, v)``."""
+    (:func:`~vlref.lights.shadow_lookup.spot_map_coords`), the texels around ``(u, v)``. The depth is the distance
+    to the light: in float64 the light stage's (:func:`reuses_distance`)."""
     prefer_wide_vectors()
+    reuse = reuses_distance(s)
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
     rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
@@ -387,7 +408,7 @@ def _spot_texels(s, q, taps, n, lf, k, res):
         x, y, z = lane3(s, R_POS, m)
         u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
                                              dx, dy, dz, tan_half)
-        set_lane(q, Q_DREF, m, d_ref)
+        set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if ahead else 0.0)
         set_texels(q, taps, m, u, v, res, np.uint64(0))
 
@@ -395,14 +416,16 @@ def _spot_texels(s, q, taps, n, lf, k, res):
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _cube_texels(s, q, taps, n, lf, k, res):
     """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis, the
-    radial distance (:func:`~vlref.lights.shadow_lookup.cube_map_coords`), the texels around ``(u, v)`` on the face."""
+    radial distance (:func:`~vlref.lights.shadow_lookup.cube_map_coords`; in float64 the light stage's,
+    :func:`reuses_distance`), the texels around ``(u, v)`` on the face."""
     prefer_wide_vectors()
+    reuse = reuses_distance(s)
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
     face_texels = np.uint64(res * res)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         face, u, v, d_ref, on_face = cube_map_coords(float(x) - px, float(y) - py, float(z) - pz)
-        set_lane(q, Q_DREF, m, d_ref)
+        set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if on_face else 0.0)
         set_texels(q, taps, m, u, v, res, np.uint64(face) * face_texels)
 
