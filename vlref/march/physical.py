@@ -300,7 +300,9 @@ def _medium_stage(s, n, i, origin, medium, geometric):
 def _light_stage(s, n, lights, k):
     """The light ``k`` at the samples: direction ``l`` and distance, the light's attenuation (distance law)
     and cone (0 at the light's own position), then ``E_l`` per channel with the colour and the cookie
-    (:func:`vlref.lights.shading.light_incidence`, lane by lane)."""
+    (:func:`vlref.lights.shading.light_incidence`, lane by lane). The smoothstep cone divides only in packets with a
+    lane inside its falloff (elsewhere its value is 0 or 1: BENCHMARKS.md "The march: one square root and a division
+    less")."""
     prefer_wide_vectors()
     li, lf = lights.ints, lights.floats
     kind, law, cone = li[k, I_KIND], li[k, I_ATT], li[k, I_CONE]
