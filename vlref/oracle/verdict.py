@@ -399,6 +399,10 @@ def _reason(report: Report) -> str:
                 parts.append(f"{m['failing_pixels']} of {m['compared_pixels']} pixels fail "
                              f"({m['failing_pixels'] - m['failing_pixels_edge']} outside the edge zone of "
                              f"{m['edge_pixels']} pixels; allowed fraction {c.bound:g})")
+            elif c.name == "zone_lean":
+                parts.append(f"zone pixels lean one way: mean (port - vlref) over the edge zone of {m['edge_pixels']} "
+                             f"pixels is {m['zone_mean_signed']:.4g}, |.| > {c.bound:.4g} (a rasteriser's choices "
+                             f"there split both ways)")
             else:
                 parts.append(f"{c.name} {c.value:.4g} > {c.bound:.4g}")
     return "; ".join(parts)
@@ -848,7 +852,7 @@ def _metrics(c: _Comparison) -> dict:
         return dict(c.metrics)
     m = c.report.metrics
     keys = ("compared_pixels", "failing_pixels", "failing_pixels_edge", "edge_pixels", "max_abs", "mean_abs",
-            "mean_abs_outside_edges", "ref_mean_abs")
+            "mean_abs_outside_edges", "ref_mean_abs", "zone_mean_signed")
     return {**{k: m[k] for k in keys}, "margins": c.report.margins()}
 
 
