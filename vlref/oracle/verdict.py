@@ -32,8 +32,10 @@ than the bias), all grown by ``edge_pixels`` pixels. The shading comparisons (``
 set vlref's exact shadow rays against a port's map lookups, which differ only where a caster's edge is near:
 their zone holds the surface points whose lookup lies within ``edge_pixels + LOOKUP_OFFSET_TEXELS`` texels of a
 silhouette of either renderer's maps (:func:`silhouette_zone`), so sunlit ground stays judged pixel by pixel and
-by the mean error outside the zone (ground that shadows itself fails there). The presets of the against-the-scene
-comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
+by the mean error outside the zone (ground that shadows itself fails there). A zone pixel there may differ either
+way, but the zone may not lean one way: the colour presets bound the signed mean of port - vlref over it
+(``max_zone_lean``: shadows grown or shrunk by a texel fail; reason "zone pixels lean one way"). The presets of
+the against-the-scene comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
 take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
 reference is whichever of vlref's two decisions lies closest to the port's value. Every pixel may also differ by
