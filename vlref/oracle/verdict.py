@@ -35,8 +35,8 @@ silhouette of either renderer's maps (:func:`silhouette_zone`), so sunlit ground
 by the mean error outside the zone (ground that shadows itself fails there). A zone pixel there may differ either
 way, but the zone may not lean one way: the colour presets bound the signed mean of port - vlref over it
 (``max_zone_lean``: shadows grown or shrunk by a texel fail; reason "zone pixels lean one way"). The presets of
-the against-the-scene comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
-take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
+the against-the-scene comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the
+port may also take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
 reference is whichever of vlref's two decisions lies closest to the port's value. Every pixel may also differ by
 vlref's own spread under float32-sized changes of the port's inputs (:func:`_rounding_allowance`: twice the change
