@@ -379,7 +379,7 @@ def test_every_number_knob_is_checked_from_the_class_alone():
     """The knobs come from Tolerance's fields (no list beside it): each number refuses a negative value."""
     base = dict(abs_tol=0.0, rel_tol=0.0, max_fail_fraction=0.0, max_mean_abs=0.0)
     numbers = [f.name for f in dataclasses.fields(Tolerance) if f.type in ("float", "float | None")]
-    assert len(numbers) == 8
+    assert len(numbers) == 9
     for key in numbers:
         with pytest.raises(InputError) as exc:
             Tolerance(**{**base, key: -1.0})

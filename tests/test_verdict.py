@@ -143,6 +143,27 @@ def test_raster_bug_fails_the_comparison_that_owns_it(exported, tmp_path, bug):
         assert v[name].passed, (name, v[name].reason)
 
 
+def test_a_zone_that_leans_one_way_fails_though_each_of_its_pixels_may_differ(exported, tmp_path):
+    """The shading zone lets each pixel differ by any amount, either way: a rasteriser may take the other side of
+    an edge, a map texel the other side of a silhouette. Darkening every depth-edge pixel (all inside the zone)
+    passes every per-pixel check and the mean error outside the zone; only the zone's signed mean fails it, and
+    the same changes with alternating signs pass."""
+    def edited(sign):
+        port = _copy(exported[1], tmp_path / f"port{sign}")
+        depth = read_image(port / "depth.exr")[..., 0]
+        edges = depth_discontinuities(np.where(np.isfinite(depth), depth, np.inf))
+        signs = np.where(np.indices(edges.shape).sum(axis=0) % 2 == 0, 1.0, sign)
+        _edit_exr(port / "colour.exr", lambda a: a * np.where(edges, 1.0 - 0.6 * signs, 1.0)[..., None])
+        return _by_name(judge(port / "port.toml"))["scene_colour"]
+
+    one_way, both_ways = edited(1.0), edited(-1.0)
+    # the first failing check: no pixel fails, nor the mean error outside the zone or over every pixel
+    assert not one_way.passed and one_way.reason.startswith("zone pixels lean one way: mean (port - vlref)")
+    assert one_way.metrics["margins"]["zone_lean"] >= 2.0
+    assert one_way.metrics["failing_pixels"] == 0 and one_way.metrics["zone_mean_signed"] < 0
+    assert both_ways.passed and both_ways.metrics["margins"]["zone_lean"] <= 0.5, both_ways.metrics
+
+
 def test_black_port_fails_with_the_reason(exported, tmp_path):
     port = _copy(exported[1], tmp_path / "port")
     for f in port.glob("port_*.npy"):

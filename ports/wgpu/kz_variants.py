@@ -89,6 +89,12 @@ VARIANTS = {
                                  {"HOST_SHADOW_CLEAR_NEAR": 1}, raster=True),
     "slope_cot": Variant("shadow: slope bias scaled by cot instead of tan", "fail", {"BUG_SLOPE_COT": 1},
                          scene="laws", raster=True),
+    "shadow_grown": Variant("lighting: a spot/point lookup also shadowed by a 4-neighbour texel whose caster is 10 % "
+                            "nearer than its own (shadows grown by one texel)", "fail", {"BUG_SHADOW_GROWN": 1},
+                            raster=True),
+    "shadow_shrunk": Variant("lighting: a spot/point lookup also lit by a 4-neighbour texel whose surface is 10 % "
+                             "farther than its own (shadows shrunk by one texel)", "fail", {"BUG_SHADOW_SHRUNK": 1},
+                             raster=True),
     "no_inv_pi": Variant("lighting: Lambert without its 1/pi", "fail", {"BUG_NO_INV_PI": 1}, raster=True),
     "eye_depth_as_range": Variant("lighting: surface point at eye depth along the ray (as if ray length)", "fail",
                                   {"BUG_EYE_DEPTH_AS_RANGE": 1}, raster=True),

@@ -40,7 +40,9 @@ RULE = ("pixel fails when |test-ref| > abs_tol*S + rel_tol*|ref| in any channel;
         "mean |ref| over the compared values (scale 'mean'); values at a bound pass; in an edge zone (pixels "
         "near depth discontinuities and shadow silhouettes) a pixel fails beyond edge_abs_tol*S + "
         "edge_rel_tol*|ref| and the mean error is taken outside the zone; with max_mean_abs_all set, the mean "
-        "|test-ref| over every compared pixel, the zone included, <= max_mean_abs_all*S")
+        "|test-ref| over every compared pixel, the zone included, <= max_mean_abs_all*S; with max_zone_lean set, "
+        "|mean (test-ref)| over the zone's compared values (signed: the zone may not lean one way) <= "
+        "max_zone_lean*S")
 
 
 @dataclass
@@ -185,6 +187,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
         metrics["mean_abs_outside_edges"] = float(np.mean(np.abs(t[outside] - r[outside]))) if outside.any() else 0.0
     metrics.setdefault("mean_abs_outside_edges", metrics["mean_abs"])
     metrics["failing_pixels_edge"] = int(np.count_nonzero(fail & zone))
+    metrics["zone_mean_signed"] = float(np.mean(t[zone] - r[zone])) if zone.any() else 0.0
     fr = hdr_flip(r, t, mask) if flip else FlipResult(None, None, "not computed")
     metrics["flip_mean"] = fr.mean
 
@@ -195,6 +198,9 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
     if tol.max_mean_abs_all is not None:
         checks.append(Check("mean_abs_all", metrics["mean_abs"], tol.max_mean_abs_all * s,
                             metrics["mean_abs"] <= tol.max_mean_abs_all * s))
+    if tol.max_zone_lean is not None and zone.any():
+        checks.append(Check("zone_lean", abs(metrics["zone_mean_signed"]), tol.max_zone_lean * s,
+                            abs(metrics["zone_mean_signed"]) <= tol.max_zone_lean * s))
     if tol.max_flip_mean is not None:
         if fr.available:
             checks.append(Check("flip_mean", fr.mean, tol.max_flip_mean, fr.mean <= tol.max_flip_mean))
@@ -205,6 +211,7 @@ def compare_arrays(ref, test, tol: Tolerance | str, mask: np.ndarray | None = No
                   "edge_pixels": tol.edge_pixels, "edge_abs_threshold": tol.edge_abs * s, "edge_rel_tol": tol.edge_rel,
                   "max_fail_fraction": tol.max_fail_fraction, "mean_abs_bound": mean_bound,
                   "mean_abs_all_bound": None if tol.max_mean_abs_all is None else tol.max_mean_abs_all * s,
+                  "zone_lean_bound": None if tol.max_zone_lean is None else tol.max_zone_lean * s,
                   "max_flip_mean": tol.max_flip_mean}
     info = {"reference": names[0], "test": names[1], **(inputs or {})}
     return Report(passed, tol, metrics, thresholds, checks, fr, info, r, t, mask, fail)

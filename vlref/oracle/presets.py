@@ -13,7 +13,9 @@ Edge zone (:mod:`vlref.oracle.edges`): when the caller gives one (``compare_arra
 beyond ``edge_abs_tol * S + edge_rel_tol * |r_c|`` (default: the base knobs) and the mean absolute error
 is taken outside it (``max_mean_abs_all``, when set, bounds the mean absolute error over every compared
 pixel, the zone included, by ``max_mean_abs_all * S``: a zone that covers much of a frame cannot hide an
-error everywhere); the presets for GPU ports allow no failing pixel (``max_fail_fraction = 0``), so
+error everywhere; ``max_zone_lean``, when set, bounds the *signed* mean of ``t - r`` over the zone's compared
+values by ``max_zone_lean * S``: a zone pixel may differ either way, the zone as a whole may not lean one way);
+the presets for GPU ports allow no failing pixel (``max_fail_fraction = 0``), so
 what a rasteriser may change is absorbed by geometry, not by a share of the image that grows with it.
 
 ``S`` is the scale: ``"absolute"`` -> 1, ``"mean"`` -> the mean ``|ref|`` over the compared values
@@ -57,6 +59,7 @@ class Tolerance:
     edge_rel_tol: float | None = None
     edge_abs_tol: float | None = None
     max_mean_abs_all: float | None = None
+    max_zone_lean: float | None = None
 
     @property
     def edge_rel(self) -> float:
@@ -90,7 +93,7 @@ _NUMBERS = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type in ("fl
 """The knobs that are numbers >= 0."""
 _OPTIONAL = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type == "float | None")
 """Knobs that may be unset (``none``): no FLIP gate; the edge zone's tolerance = the base one; no mean-error
-bound over the edge zone too."""
+bound over the edge zone too; no bound on the zone's signed mean."""
 _TEXT = tuple(f.name for f in dataclasses.fields(Tolerance) if f.type == "str" and f.name != "name")
 """Knobs that are text (``scale``, ``description``)."""
 

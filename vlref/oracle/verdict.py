@@ -32,9 +32,11 @@ than the bias), all grown by ``edge_pixels`` pixels. The shading comparisons (``
 set vlref's exact shadow rays against a port's map lookups, which differ only where a caster's edge is near:
 their zone holds the surface points whose lookup lies within ``edge_pixels + LOOKUP_OFFSET_TEXELS`` texels of a
 silhouette of either renderer's maps (:func:`silhouette_zone`), so sunlit ground stays judged pixel by pixel and
-by the mean error outside the zone (ground that shadows itself fails there). The presets of the against-the-scene
-comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the port may also
-take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
+by the mean error outside the zone (ground that shadows itself fails there). A zone pixel there may differ either
+way, but the zone may not lean one way: the colour presets bound the signed mean of port - vlref over it
+(``max_zone_lean``: shadows grown or shrunk by a texel fail; reason "zone pixels lean one way"). The presets of
+the against-the-scene comparisons are :data:`SCENE_PRESETS` (``vlref/data/presets.toml``). On its own buffers the
+port may also take a *knife-edge* decision either way (:func:`knife_edges`: a march sample exactly on a shadow-volume,
 texel or cone boundary, found by nudging the lights and the map distances by 1e-5): at those pixels the
 reference is whichever of vlref's two decisions lies closest to the port's value. Every pixel may also differ by
 vlref's own spread under float32-sized changes of the port's inputs (:func:`_rounding_allowance`: twice the change
@@ -399,6 +401,10 @@ def _reason(report: Report) -> str:
                 parts.append(f"{m['failing_pixels']} of {m['compared_pixels']} pixels fail "
                              f"({m['failing_pixels'] - m['failing_pixels_edge']} outside the edge zone of "
                              f"{m['edge_pixels']} pixels; allowed fraction {c.bound:g})")
+            elif c.name == "zone_lean":
+                parts.append(f"zone pixels lean one way: mean (port - vlref) over the edge zone of {m['edge_pixels']} "
+                             f"pixels is {m['zone_mean_signed']:.4g}, |.| > {c.bound:.4g} (a rasteriser's choices "
+                             f"there split both ways)")
             else:
                 parts.append(f"{c.name} {c.value:.4g} > {c.bound:.4g}")
     return "; ".join(parts)
@@ -848,7 +854,7 @@ def _metrics(c: _Comparison) -> dict:
         return dict(c.metrics)
     m = c.report.metrics
     keys = ("compared_pixels", "failing_pixels", "failing_pixels_edge", "edge_pixels", "max_abs", "mean_abs",
-            "mean_abs_outside_edges", "ref_mean_abs")
+            "mean_abs_outside_edges", "ref_mean_abs", "zone_mean_signed")
     return {**{k: m[k] for k in keys}, "margins": c.report.margins()}
 
 

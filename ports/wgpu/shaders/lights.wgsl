@@ -24,6 +24,8 @@ override BUG_LINEAR_CONE_IN_COS: bool = false;   // linear cone law interpolated
 override BUG_UNITY_ATT_NO_FADE: bool = false;    // unity attenuation without its saturate(5 (1 - sqrt u)) fade
 override BUG_STRENGTH_SWAPPED: bool = false;     // shadow strength as lerp(lit, 1, s) instead of lerp(1, lit, s)
 override BUG_SHADOW_PLANAR: bool = false;        // stored depth taken as radial distance (no texel-ray factor)
+override BUG_SHADOW_GROWN: bool = false;         // also shadowed by a neighbour texel's nearer caster (grown)
+override BUG_SHADOW_SHRUNK: bool = false;        // also lit by a neighbour texel's farther surface (shrunk)
 
 struct Incidence { l: vec3f, e: vec3f }
 
@@ -162,7 +164,23 @@ fn shadow_visibility(li: Light, x: vec3f) -> f32 {
         st -= vec2f(0.5);
     }
     let texel = clamp(vec2i(floor(st)), vec2i(0), vec2i(i32(res) - 1));
-    let lit = select(0.0, 1.0, m.d_ref <= radial_distance(li, texel, m.layer, m.tan_h));
+    var stored = radial_distance(li, texel, m.layer, m.tan_h);
+    if (BUG_SHADOW_GROWN || BUG_SHADOW_SHRUNK) {
+        // a neighbour 10 % nearer (a caster's edge beside) or farther (a receiver beside) replaces the texel
+        let own = stored;
+        let last = vec2i(i32(res) - 1);
+        for (var k = 0; k < 4; k++) {
+            let step = select(vec2i(0, 2 * (k % 2) - 1), vec2i(2 * (k % 2) - 1, 0), k < 2);
+            let other = radial_distance(li, clamp(texel + step, vec2i(0), last), m.layer, m.tan_h);
+            if (BUG_SHADOW_GROWN && other < 0.9 * own) {
+                stored = min(stored, other);
+            }
+            if (BUG_SHADOW_SHRUNK && 0.9 * other > own) {
+                stored = max(stored, other);
+            }
+        }
+    }
+    let lit = select(0.0, 1.0, m.d_ref <= stored);
     if (BUG_STRENGTH_SWAPPED) {
         return mix(lit, 1.0, li.color_strength.w);
     }
