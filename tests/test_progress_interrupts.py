@@ -245,6 +245,26 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("cores, groups", [
+    (1, []),
+    (2, [["shadow maps", "march"]]),  # the march's process compiles the shadow maps first: the render needs them first
+    (3, [["march"], ["shadow maps"]]),  # not the ray cast after the maps: the render needs it first
+    (4, [["march"], ["shadow maps"], ["raycast", "shading"]]),
+    (16, [["march"], ["shadow maps"], ["raycast"], ["shading"]]),
+])
+def test_second_processes_share_the_stages_by_core_count(monkeypatch, cores, groups):
+    """One process per core beyond the first; with fewer processes than stages the last also compiles the next
+    stage in priority order (but the ray cast), each process in the order the render reaches its stages."""
+    from vlref import warmup
+
+    scene = load_scene(None, ["render.width=8", "render.height=5", 'render.technique="physical"'])
+    monkeypatch.setattr(warmup, "host_cores", lambda: cores)
+    monkeypatch.setattr(warmup, "stage_cached", lambda stage, scene: False)
+    assert warmup._stages_ahead(scene) == groups
+    monkeypatch.setattr(warmup, "stage_cached", lambda stage, scene: stage == "shadow maps")
+    assert warmup._stages_ahead(scene)[:1] == [["march"]][:len(groups)]  # 2 cores: not [raycast, march]
+
+
 @pytest.mark.parametrize("scene_name, extra", [
     ("pillars", []),
     ("colonnade", []),  # an OBJ mesh: a non-empty triangle BVH
@@ -257,13 +277,16 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
     """``vlref render`` compiles later stages ahead on 1×1 frames with no objects (and a G-buffer of sky, no
     shadow maps but the stage's own): each must have exactly the types of the real frame's call, or the real
     render would compile again."""
+    from vlref.post.composite import _composite, _sum_lights
     from vlref.warmup import AHEAD, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
     called = {stage: set(kernel.signatures) for stage, (_, kernel) in AHEAD.items()}
+    after_march = {kernel: set(kernel.signatures) for kernel in (_composite, _sum_lights)}  # the march stage's too
     for stage, (_, kernel) in AHEAD.items():
         compile_stage(stage, scene)
         assert set(kernel.signatures) == called[stage], stage
+        assert {k: set(k.signatures) for k in after_march} == after_march, stage
         if stage == "march" or kernel.signatures:  # cache=True wrote it; the render command then starts no process
             assert stage_cached(stage, scene), stage

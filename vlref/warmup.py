@@ -47,6 +47,7 @@ from .lights import pack_lights
 from .lights.shading import _shade, scene_colour
 from .lights.shadow_cast import _cast_face, build_shadow_maps
 from .march.physical import march_physical
+from .post.composite import composite_physical, sum_lights
 from .processes import host_cores, ignoring_sigint
 from .reference import render_reference
 from .render import prepare_frame, render
@@ -55,7 +56,7 @@ from .sequence import render_sequence
 from .techniques import resolved
 from .techniques.physical import march_buffers
 
-__all__ = ["TASKS", "warmup", "compile_ahead", "compile_stage", "stage_cached", "AHEAD"]
+__all__ = ["TASKS", "warmup", "compile_ahead", "compile_stage", "compile_stages", "stage_cached", "AHEAD"]
 
 TINY = ["render.width=16", "render.height=9", "render.steps=2"]
 # name -> (what runs, bundled scene (None: the default), overrides at TINY size); see the module docstring
@@ -176,10 +177,19 @@ def compile_stage(stage: str, scene) -> None:
         scene_colour(_sky_gbuffer(), bare, geometry, lights)
     elif stage == "shadow maps":
         build_shadow_maps(bare, camera, geometry, lights)
-    else:
+    else:  # the march, and what the technique does with its buffers (vlref.techniques.physical.render)
         maps = build_shadow_maps(bare, camera, geometry, lights)
-        march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
-                      resolved(scene, "steps"), resolved(scene, "sampling"))
+        per_light, trans = march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
+                                         resolved(scene, "steps"), resolved(scene, "sampling"))
+        composite_physical(np.zeros((1, 1, 3)), trans, sum_lights(per_light))
+
+
+def compile_stages(stages: list[str], scene, done: list) -> None:
+    """:func:`compile_stage` for each of ``stages`` in turn, setting the event ``done[i]`` when ``stages[i]`` is
+    compiled (a second process of :func:`compile_ahead`)."""
+    for stage, event in zip(stages, done):
+        compile_stage(stage, scene)
+        event.set()
 
 
 def _march_wanted(dtype, rays: bool):
@@ -203,6 +213,10 @@ AHEAD: dict[str, tuple[str, object]] = {
 one); the kernel of each is the one whose cache entry says the stage is compiled."""
 
 
+_TICKS = ("geometry", "raycast", "shading", "shadow maps")
+"""The render's ticks in the order it reaches them (:class:`vlref.render.Frame`)."""
+
+
 def _kernel_cached(kernel, wanted=lambda sig: True) -> bool:
     """Whether Numba's cache holds ``kernel`` for its current source with a signature ``wanted(sig)`` accepts
     (its index, read without compiling). False when the index cannot be read."""
@@ -224,12 +238,24 @@ def stage_cached(stage: str, scene) -> bool:
     return _kernel_cached(AHEAD[stage][1])
 
 
-def _stages_ahead(scene) -> list[str]:
-    """The stages of a render of ``scene`` worth a second process: used by the render, not cached, one per
-    core beyond the first, in the order of :data:`AHEAD`."""
+def _stages_ahead(scene) -> list[list[str]]:
+    """The stages of a render of ``scene`` worth a second process (used by the render, not cached, in the order
+    of :data:`AHEAD`), one process per core beyond the first: what each process compiles, in the order the
+    render reaches them. With fewer processes than stages, the last one compiles the next stage too, unless that
+    is the ray cast (the render needs it first: the main process would wait): the march alone compiles in about
+    60 % of the time the main process takes for the frame's kernels, so on two cores one process compiles the
+    shadow maps and then the march while the main one compiles the BVH build, the ray cast and the shading
+    (BENCHMARKS.md "Cold first render on two cores")."""
     used = {"march": scene.render.technique == "physical",
             "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
-    return [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)][:host_cores() - 1]
+    stages = [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)]
+    procs = host_cores() - 1
+    if procs < 1 or not stages:
+        return []
+    groups = [[stage] for stage in stages[:procs]]
+    if len(stages) > procs and stages[procs] != "raycast":  # the main process would wait for the ray cast at once
+        groups[-1].append(stages[procs])
+    return [sorted(group, key=lambda stage: _TICKS.index(AHEAD[stage][0])) for group in groups]
 
 
 @contextlib.contextmanager
@@ -238,20 +264,24 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     docstring); yields ``ready(tick)``, to be called with each render tick: it waits for the process compiling
     the stage that comes next. A no-op where everything is cached or on one core. The processes are
     terminated when the block exits early (an error, an interrupt)."""
-    procs = {}
+    procs, done = [], {}
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
-        for stage in _stages_ahead(scene):
-            procs[AHEAD[stage][0]] = _spawn().Process(target=compile_stage, args=(stage, scene), daemon=True)
-            procs[AHEAD[stage][0]].start()
+        for group in _stages_ahead(scene):
+            events = [_spawn().Event() for _ in group]
+            procs.append(_spawn().Process(target=compile_stages, args=(group, scene, events), daemon=True))
+            procs[-1].start()
+            done.update({AHEAD[stage][0]: (procs[-1], event) for stage, event in zip(group, events)})
 
     def ready(tick: str) -> None:
-        if tick in procs:
-            procs[tick].join()
+        if tick in done:
+            proc, event = done[tick]
+            while not event.wait(0.1) and proc.is_alive():  # a process that failed: the main one compiles it
+                pass
 
     try:
         yield ready
     finally:
-        for proc in procs.values():
+        for proc in procs:
             if proc.is_alive():
                 proc.terminate()
             proc.join()
