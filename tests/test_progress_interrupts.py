@@ -245,26 +245,6 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("cores, groups", [
-    (1, []),
-    (2, [["shadow maps", "march"]]),  # the march's process compiles the shadow maps first: the render needs them first
-    (3, [["march"], ["shadow maps"]]),  # not the ray cast after the maps: the render needs it first
-    (4, [["march"], ["shadow maps"], ["raycast", "shading"]]),
-    (16, [["march"], ["shadow maps"], ["raycast"], ["shading"]]),
-])
-def test_second_processes_share_the_stages_by_core_count(monkeypatch, cores, groups):
-    """One process per core beyond the first; with fewer processes than stages the last also compiles the next
-    stage in priority order (but the ray cast), each process in the order the render reaches its stages."""
-    from vlref import warmup
-
-    scene = load_scene(None, ["render.width=8", "render.height=5", 'render.technique="physical"'])
-    monkeypatch.setattr(warmup, "host_cores", lambda: cores)
-    monkeypatch.setattr(warmup, "stage_cached", lambda stage, scene: False)
-    assert warmup._stages_ahead(scene) == groups
-    monkeypatch.setattr(warmup, "stage_cached", lambda stage, scene: stage == "shadow maps")
-    assert warmup._stages_ahead(scene)[:1] == [["march"]][:len(groups)]  # 2 cores: not [raycast, march]
-
-
 @pytest.mark.parametrize("scene_name, extra", [
     ("pillars", []),
     ("colonnade", []),  # an OBJ mesh: a non-empty triangle BVH

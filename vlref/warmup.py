@@ -18,11 +18,13 @@ A task that finds its kernels cached only loads them: a second ``vlref warmup`` 
 Without a warm-up, ``vlref render`` spreads its compile over processes (:func:`compile_ahead`): while the
 main process compiles the BVH build, second processes compile, each for the scene's types, the kernels of a
 later stage on a 1×1 frame that needs no earlier stage's kernel (no objects, no shadow maps but the stage's
-own, a G-buffer of sky: the same array types, empty): the march, the shadow maps, the ray cast, the surface
-shading, in that order of priority, one process per core beyond the first. The main process picks each up
-from the cache when it reaches that stage (:class:`vlref.render.Frame` ticks each stage as it ends; the
-next one waits for its process). The 1×1 frame keeps the lights' ``exact`` shadows, which choose the
-march's variant with the shadow-ray tracer (:func:`vlref.march.physical.march_physical`). Cold, the
+own, a G-buffer of sky: the same array types, empty): the march (with the composite of its buffers), the shadow
+maps, the ray cast, the surface shading, in that order of priority, one process per core beyond the first (on
+two cores the march alone: with the shadow maps too, that process became the longer one, BENCHMARKS.md "Cold
+first render on two cores"). The main process picks each up from the cache when it reaches that stage
+(:class:`vlref.render.Frame` ticks each stage as it ends; the next one waits for its process). The 1×1 frame
+keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
+(:func:`vlref.march.physical.march_physical`). Cold, the
 default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s
 on the slower one of 2026-11-23, where the frame's kernels took about 38 s of compile, the longer half, and
 the march without the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Scheduling, borrowed records, a
@@ -56,7 +58,7 @@ from .sequence import render_sequence
 from .techniques import resolved
 from .techniques.physical import march_buffers
 
-__all__ = ["TASKS", "warmup", "compile_ahead", "compile_stage", "compile_stages", "stage_cached", "AHEAD"]
+__all__ = ["TASKS", "warmup", "compile_ahead", "compile_stage", "stage_cached", "AHEAD"]
 
 TINY = ["render.width=16", "render.height=9", "render.steps=2"]
 # name -> (what runs, bundled scene (None: the default), overrides at TINY size); see the module docstring
@@ -184,14 +186,6 @@ def compile_stage(stage: str, scene) -> None:
         composite_physical(np.zeros((1, 1, 3)), trans, sum_lights(per_light))
 
 
-def compile_stages(stages: list[str], scene, done: list) -> None:
-    """:func:`compile_stage` for each of ``stages`` in turn, setting the event ``done[i]`` when ``stages[i]`` is
-    compiled (a second process of :func:`compile_ahead`)."""
-    for stage, event in zip(stages, done):
-        compile_stage(stage, scene)
-        event.set()
-
-
 def _march_wanted(dtype, rays: bool):
     """The march's cache entries for ``dtype`` and the shadow-ray variant (``rays``): its argument ``geo`` is
     None without the ray tracer."""
@@ -211,10 +205,6 @@ AHEAD: dict[str, tuple[str, object]] = {
 }
 """The stages :func:`compile_ahead` may compile in second processes (the BVH build, first, stays in the main
 one); the kernel of each is the one whose cache entry says the stage is compiled."""
-
-
-_TICKS = ("geometry", "raycast", "shading", "shadow maps")
-"""The render's ticks in the order it reaches them (:class:`vlref.render.Frame`)."""
 
 
 def _kernel_cached(kernel, wanted=lambda sig: True) -> bool:
@@ -238,24 +228,12 @@ def stage_cached(stage: str, scene) -> bool:
     return _kernel_cached(AHEAD[stage][1])
 
 
-def _stages_ahead(scene) -> list[list[str]]:
-    """The stages of a render of ``scene`` worth a second process (used by the render, not cached, in the order
-    of :data:`AHEAD`), one process per core beyond the first: what each process compiles, in the order the
-    render reaches them. With fewer processes than stages, the last one compiles the next stage too, unless that
-    is the ray cast (the render needs it first: the main process would wait): the march alone compiles in about
-    60 % of the time the main process takes for the frame's kernels, so on two cores one process compiles the
-    shadow maps and then the march while the main one compiles the BVH build, the ray cast and the shading
-    (BENCHMARKS.md "Cold first render on two cores")."""
+def _stages_ahead(scene) -> list[str]:
+    """The stages of a render of ``scene`` worth a second process: used by the render, not cached, one per
+    core beyond the first, in the order of :data:`AHEAD`."""
     used = {"march": scene.render.technique == "physical",
             "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
-    stages = [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)]
-    procs = host_cores() - 1
-    if procs < 1 or not stages:
-        return []
-    groups = [[stage] for stage in stages[:procs]]
-    if len(stages) > procs and stages[procs] != "raycast":  # the main process would wait for the ray cast at once
-        groups[-1].append(stages[procs])
-    return [sorted(group, key=lambda stage: _TICKS.index(AHEAD[stage][0])) for group in groups]
+    return [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)][:host_cores() - 1]
 
 
 @contextlib.contextmanager
@@ -264,24 +242,20 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     docstring); yields ``ready(tick)``, to be called with each render tick: it waits for the process compiling
     the stage that comes next. A no-op where everything is cached or on one core. The processes are
     terminated when the block exits early (an error, an interrupt)."""
-    procs, done = [], {}
+    procs = {}
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
-        for group in _stages_ahead(scene):
-            events = [_spawn().Event() for _ in group]
-            procs.append(_spawn().Process(target=compile_stages, args=(group, scene, events), daemon=True))
-            procs[-1].start()
-            done.update({AHEAD[stage][0]: (procs[-1], event) for stage, event in zip(group, events)})
+        for stage in _stages_ahead(scene):
+            procs[AHEAD[stage][0]] = _spawn().Process(target=compile_stage, args=(stage, scene), daemon=True)
+            procs[AHEAD[stage][0]].start()
 
     def ready(tick: str) -> None:
-        if tick in done:
-            proc, event = done[tick]
-            while not event.wait(0.1) and proc.is_alive():  # a process that failed: the main one compiles it
-                pass
+        if tick in procs:
+            procs[tick].join()
 
     try:
         yield ready
     finally:
-        for proc in procs:
+        for proc in procs.values():
             if proc.is_alive():
                 proc.terminate()
             proc.join()
