@@ -257,13 +257,16 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
     """``vlref render`` compiles later stages ahead on 1×1 frames with no objects (and a G-buffer of sky, no
     shadow maps but the stage's own): each must have exactly the types of the real frame's call, or the real
     render would compile again."""
+    from vlref.post.composite import _composite, _sum_lights
     from vlref.warmup import AHEAD, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
     called = {stage: set(kernel.signatures) for stage, (_, kernel) in AHEAD.items()}
+    after_march = {kernel: set(kernel.signatures) for kernel in (_composite, _sum_lights)}  # the march stage's too
     for stage, (_, kernel) in AHEAD.items():
         compile_stage(stage, scene)
         assert set(kernel.signatures) == called[stage], stage
+        assert {k: set(k.signatures) for k in after_march} == after_march, stage
         if stage == "march" or kernel.signatures:  # cache=True wrote it; the render command then starts no process
             assert stage_cached(stage, scene), stage

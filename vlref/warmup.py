@@ -18,11 +18,13 @@ A task that finds its kernels cached only loads them: a second ``vlref warmup`` 
 Without a warm-up, ``vlref render`` spreads its compile over processes (:func:`compile_ahead`): while the
 main process compiles the BVH build, second processes compile, each for the scene's types, the kernels of a
 later stage on a 1×1 frame that needs no earlier stage's kernel (no objects, no shadow maps but the stage's
-own, a G-buffer of sky: the same array types, empty): the march, the shadow maps, the ray cast, the surface
-shading, in that order of priority, one process per core beyond the first. The main process picks each up
-from the cache when it reaches that stage (:class:`vlref.render.Frame` ticks each stage as it ends; the
-next one waits for its process). The 1×1 frame keeps the lights' ``exact`` shadows, which choose the
-march's variant with the shadow-ray tracer (:func:`vlref.march.physical.march_physical`). Cold, the
+own, a G-buffer of sky: the same array types, empty): the march (with the composite of its buffers), the shadow
+maps, the ray cast, the surface shading, in that order of priority, one process per core beyond the first (on
+two cores the march alone: with the shadow maps too, that process became the longer one, BENCHMARKS.md "Cold
+first render on two cores"). The main process picks each up from the cache when it reaches that stage
+(:class:`vlref.render.Frame` ticks each stage as it ends; the next one waits for its process). The 1×1 frame
+keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
+(:func:`vlref.march.physical.march_physical`). Cold, the
 default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s
 on the slower one of 2026-11-23, where the frame's kernels took about 38 s of compile, the longer half, and
 the march without the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Scheduling, borrowed records, a
@@ -47,6 +49,7 @@ from .lights import pack_lights
 from .lights.shading import _shade, scene_colour
 from .lights.shadow_cast import _cast_face, build_shadow_maps
 from .march.physical import march_physical
+from .post.composite import composite_physical, sum_lights
 from .processes import host_cores, ignoring_sigint
 from .reference import render_reference
 from .render import prepare_frame, render
@@ -176,10 +179,11 @@ def compile_stage(stage: str, scene) -> None:
         scene_colour(_sky_gbuffer(), bare, geometry, lights)
     elif stage == "shadow maps":
         build_shadow_maps(bare, camera, geometry, lights)
-    else:
+    else:  # the march, and what the technique does with its buffers (vlref.techniques.physical.render)
         maps = build_shadow_maps(bare, camera, geometry, lights)
-        march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
-                      resolved(scene, "steps"), resolved(scene, "sampling"))
+        per_light, trans = march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
+                                         resolved(scene, "steps"), resolved(scene, "sampling"))
+        composite_physical(np.zeros((1, 1, 3)), trans, sum_lights(per_light))
 
 
 def _march_wanted(dtype, rays: bool):

@@ -134,7 +134,8 @@ def _sort_by_key(idx, s, e, key):
                     j += 1
         a, b = b, a
         width *= 2
-    idx[s:e] = a
+    for k in range(n):  # not ``idx[s:e] = a``: its shape check compiles Numba's string formatting
+        idx[s + k] = a[k]
 
 
 @njit(cache=True, fastmath=False)
@@ -165,8 +166,8 @@ def _build(tmin, tmax, cent, max_leaf, pad):
                 hi[c] = max(hi[c], tmax[k, c])
                 clo[c] = min(clo[c], cent[k, c])
                 chi[c] = max(chi[c], cent[k, c])
-        node_min[node] = lo - pad
-        node_max[node] = hi + pad
+        for c in range(3):  # per element: a row assignment's shape check compiles Numba's string formatting
+            node_min[node, c], node_max[node, c] = lo[c] - pad, hi[c] + pad
         count = e - s
         if count <= max_leaf:
             node_first[node], node_count[node] = s, count
