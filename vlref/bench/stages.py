@@ -21,7 +21,7 @@ from ..render import render
 from ..scene import load_scene
 from .config import BenchConfig, bench_scene, median_time
 
-__all__ = ["bench_geometry", "bench_post"]
+__all__ = ["bench_geometry", "bench_post", "post_passes"]
 
 
 def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
@@ -44,16 +44,16 @@ def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
     return rc_out, sm_out
 
 
-def bench_post(cfg: BenchConfig) -> dict:
-    """Each post pass at ``cfg.width x cfg.height`` (half-resolution inputs where the pass takes them)."""
-    h, w = cfg.height, cfg.width
+def post_passes(h: int, w: int) -> dict:
+    """Each post pass at ``w x h`` as a call without arguments, on fixed inputs (``default_rng(0)``; half-resolution
+    inputs where the pass takes them): what :func:`bench_post` times and benchmarks/post_ab.py compares."""
     rng = np.random.default_rng(0)
     depth = rng.uniform(1.0, 30.0, size=(h, w))
     depth_lo = downsample_min(depth, "half")
     lo = rng.random(depth_lo.shape + (3,))
     full = rng.random((h, w, 3))
     trans = rng.random((h, w))
-    passes = {
+    return {
         "downsample_min_half": lambda: downsample_min(depth, "half"),
         "thesis_upsample": lambda: thesis_upsample(lo, depth_lo, depth),
         "vl_upsample": lambda: vl_upsample(lo, depth_lo, depth),
@@ -62,6 +62,12 @@ def bench_post(cfg: BenchConfig) -> dict:
         "radial_blur_64": lambda: radial_blur(full, (0.5, 0.4), 64, 0.9, 0.5, 0.97, 0.3),
         "composite": lambda: composite_physical(full, trans, full),
     }
+
+
+def bench_post(cfg: BenchConfig) -> dict:
+    """Each post pass at ``cfg.width x cfg.height`` (:func:`post_passes`), and the explorer's preview re-render."""
+    h, w = cfg.height, cfg.width
+    passes = post_passes(h, w)
     out = {name: {"seconds": median_time(fn, cfg.repeats), "width": w, "height": h} for name, fn in passes.items()}
     pw, ph, steps = cfg.preview
     scene = bench_scene(pw, ph, steps, "one", cfg.shadow_resolution, technique="killzone", resolution="half")
