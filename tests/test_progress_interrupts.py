@@ -22,6 +22,7 @@ import pytest
 
 import vlref
 from vlref import progress
+from vlref.cli.commands import Interrupted, _interruptible
 from vlref.progress import reporting, row_bands
 from vlref.reference import quadrature, render_reference
 from vlref.render import render
@@ -211,6 +212,24 @@ def test_every_long_command_exits_cleanly_on_a_signal(tmp_path, argv, marker, si
     env = {"NUMBA_CACHE_DIR": str(inputs / "cold-cache")} if argv[0] == "warmup" else None
     _interrupt(_work(tmp_path), [a.replace("{inputs}", str(inputs)) for a in argv], marker, sig,
                group=sig == signal.SIGINT, env=env)
+
+
+def test_a_signal_that_lands_in_a_finalizer_still_interrupts_the_command():
+    """A signal handled while a ``__del__`` runs (an object freed mid-command, as llvmlite's are while Numba
+    compiles) interrupts the command: raised in the frame that freed the object, not inside the finalizer, where
+    the interpreter would print "Exception ignored" and go on."""
+    class SignalledOnFree:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGTERM)   # handled at the finalizer's next bytecode
+            self.freed = True
+
+    after = []
+    with pytest.raises(Interrupted) as caught:
+        with _interruptible():
+            obj = SignalledOnFree()
+            del obj
+            after.append("ran on")
+    assert caught.value.signum == signal.SIGTERM and after == []
 
 
 def test_ctrl_c_under_a_local_dask_cluster_exits_cleanly(tmp_path):

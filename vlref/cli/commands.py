@@ -74,13 +74,14 @@ def _callback_caller(frame):
     caller runs Python code whose own caller does not pass an exception on; then the frame that called
     that code (the outermost such). Such code: ``numba.core.serialize._numba_unpickle``, which Numba's
     compiled code calls to box every array a kernel returns (it ignores the error and returns a result with
-    an exception set: SystemError), and imports (a C extension's initialisation turns any exception into
-    ``ImportError: initialization failed``)."""
+    an exception set: SystemError), imports (a C extension's initialisation turns any exception into
+    ``ImportError: initialization failed``) and finalizers (``__del__``: the interpreter prints "Exception
+    ignored in ..." and goes on, e.g. llvmlite's objects freed while Numba compiles)."""
     caller, current = frame, frame
     while current is not None:
         name = current.f_globals.get("__name__")
         if (current.f_code.co_name == "_numba_unpickle" and name == "numba.core.serialize") or \
-                name == "importlib._bootstrap":
+                name == "importlib._bootstrap" or current.f_code.co_name == "__del__":
             caller = current.f_back
         current = current.f_back
     return caller
