@@ -18,7 +18,7 @@ import subprocess
 import sys
 
 CHILD = """
-import hashlib, json
+import hashlib, inspect, json
 import numpy as np
 from vlref.bench.config import bench_scene, median_time as median
 from vlref.bench.renders import _whole
@@ -49,7 +49,12 @@ stored = ((g.depth, g.distance, g.normal, g.object_id) if hasattr(g, "origin") e
           (g.depth, g.distance, g.position, g.normal, g.albedo, g.emission, g.object_id))
 dirs = np.ascontiguousarray(camera.ray_directions(copy=False))
 origin = np.ascontiguousarray(camera.position, dtype=np.float64)
-kernel = median(lambda: _raycast_kernel(geometry.arrays, origin, dirs, forward, float(camera.far), *stored), 5)
+kernel_args = (geometry.arrays, origin, dirs, forward, float(camera.far), *stored)
+if "cast_rows" in inspect.signature(_raycast_kernel.py_func).parameters:  # the kernel takes its work by address
+    from vlref.geometry.raycast import _cast_rows
+    from vlref.parallel import COUNTER, work
+    kernel_args += (work(_cast_rows, COUNTER, *kernel_args),)
+kernel = median(lambda: _raycast_kernel(*kernel_args), 5)
 from numpy._core.multiarray import _set_madvise_hugepage
 _set_madvise_hugepage(False)
 rc_small_pages = median(lambda: raycast(scene, camera, geometry), 5)

@@ -18,17 +18,35 @@ pass the same input arrays (the light, shadow and medium records) to small funct
 they contend for those counters' cache lines. A borrowed view has no counter, so counting its references
 does nothing. It does not keep its memory alive either: borrow only inside the kernel that received the
 array as an argument (its owner outlives the call).
+
+**Work called by address** (:func:`work`). A ``parallel=True`` kernel is a thin shell: a ``prange`` whose
+body calls the function that does the work (the row or task function). Called as Numba calls any compiled
+function, that function's whole call tree is linked into the caller's LLVM module, and Numba optimises and
+generates machine code for each module it builds, callees included: a ``prange`` builds four (the loop body's
+gufunc, its two wrappers, the kernel), so the work's call tree was optimised and code-generated four more
+times in every parallel kernel (a cold compile of the march: 4.3 s of its 10 s of LLVM; BENCHMARKS.md "Cold first
+render on two cores, second round"). The kernels take the work as an argument instead, a Numba first-class
+function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types): the
+shell calls it through that address, and only the work's own module holds its code. Same machine code for the
+work (the same function, optimised once instead of re-optimised: IEEE arithmetic either way), one indirect
+call per worker. The work must not raise: through its C wrapper an exception is printed, not propagated (the
+kernels check their arguments before the ``prange``).
 """
 
 from __future__ import annotations
 
+import numba
 from numba.core import cgutils, types
 from numba.core.errors import TypingError
+from numba.core.types.function_type import WrapperAddressProtocol
+from numba.core.typing import signature
 from numba.extending import intrinsic
 
-__all__ = ["WORKERS", "take", "borrowed"]
+__all__ = ["WORKERS", "COUNTER", "take", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
+COUNTER = types.Array(types.int64, 1, "C")
+"""The Numba type of the task counter of :func:`take` (``np.zeros(1, dtype=np.int64)``), for :func:`work`."""
 
 
 @intrinsic
@@ -81,3 +99,33 @@ def borrowed(typingctx, value):
         return _borrow(context, builder, signature.args[0], args[0])
 
     return value(value), codegen
+
+
+class Work(WrapperAddressProtocol):
+    """A compiled function passed to a parallel kernel by address (module docstring): Numba types it as a
+    first-class function of ``sig``; the kernel calls it through the address of its C wrapper."""
+
+    def __init__(self, function, sig):
+        self._sig = sig
+        result = function.get_compile_result(sig)  # compiles or loads from the cache now, not while unboxing
+        self._address = result.library.get_pointer_to_function(result.fndesc.llvm_cfunc_wrapper_name)
+
+    def __wrapper_address__(self) -> int:
+        return self._address
+
+    def signature(self):
+        return self._sig
+
+
+_WORK: dict = {}
+
+
+def work(function, *args) -> Work:
+    """``function`` (an ``njit`` dispatcher returning nothing) as a :class:`Work` for arguments of the types of
+    ``args`` (values, or Numba types such as :data:`COUNTER`): pass it to the kernel whose workers call it with
+    arguments of these types (borrowed views have their arrays' types). One per function and types, kept."""
+    argtypes = tuple(a if isinstance(a, types.Type) else numba.typeof(a) for a in args)
+    key = (function, argtypes)
+    if key not in _WORK:
+        _WORK[key] = Work(function, signature(types.none, *argtypes))
+    return _WORK[key]

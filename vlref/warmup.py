@@ -48,7 +48,7 @@ from .geometry.raycast import _raycast_kernel
 from .lights import pack_lights
 from .lights.shading import _shade, scene_colour
 from .lights.shadow_cast import _cast_face, build_shadow_maps
-from .march.physical import march_physical
+from .march.physical import _march_kernel
 from .post.composite import composite_physical, sum_lights
 from .processes import host_cores, ignoring_sigint
 from .reference import render_reference
@@ -192,13 +192,13 @@ def _march_wanted(dtype, rays: bool):
     import numba
 
     want = numba.typeof(np.zeros(3, dtype=dtype))
-    geo = 8  # march_physical's argument ``geo``
+    geo = 8  # _march_kernel's argument ``geo``
     return lambda sig: len(sig) > geo and sig[0] == want and (sig[geo] != numba.types.none) == rays
 
 
 AHEAD: dict[str, tuple[str, object]] = {
     # stage -> (the render tick after which the main process calls its kernel, its kernel); in order of priority
-    "march": ("shadow maps", march_physical),
+    "march": ("shadow maps", _march_kernel),
     "shadow maps": ("shading", _cast_face),
     "raycast": ("geometry", _raycast_kernel),
     "shading": ("raycast", _shade),
@@ -224,7 +224,7 @@ def stage_cached(stage: str, scene) -> bool:
     shadow-ray variant)."""
     if stage == "march":
         dtype = np.float32 if scene.render.precision == "float32" else np.float64
-        return _kernel_cached(march_physical, _march_wanted(dtype, any(_exact(light) for light in scene.lights)))
+        return _kernel_cached(_march_kernel, _march_wanted(dtype, any(_exact(light) for light in scene.lights)))
     return _kernel_cached(AHEAD[stage][1])
 
 

@@ -36,7 +36,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..camera import Camera
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..scene.model import Scene
 from .bvh import traversal_stack
 from .scene_geometry import OPAQUE_ONLY, Geometry, build_geometry, closest_hits
@@ -91,11 +91,14 @@ def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
 @njit(cache=True, fastmath=False)
 def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, object_id):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
-    (:func:`closest_hits`), then its G-buffer pixels written (module docstring)."""
+    (:func:`closest_hits`), then its G-buffer pixels written (module docstring). The arrays are borrowed
+    (:func:`vlref.parallel.borrowed`)."""
     h, w = depth.shape
     y = take(taken)
     if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
         return
+    geo, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
+        (geo, origin, dirs, forward, depth, distance, normal, object_id))
     ox, oy, oz = origin[0], origin[1], origin[2]
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
     t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
@@ -121,13 +124,12 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, 
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, normal, object_id):
-    """The G-buffer: every worker casts the rows it takes (:func:`_cast_rows`) on borrowed arrays (module
-    docstring, "Performance")."""
+def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
+    """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
+    :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        g, o, d, f, db, ds, n, ids = borrowed((geo, origin, dirs, forward, depth, distance, normal, object_id))
-        _cast_rows(taken, g, o, d, f, far, db, ds, n, ids)
+        cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, object_id)
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
@@ -146,6 +148,7 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                   object_id=np.empty((h, w), dtype=np.int32),
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
-    _raycast_kernel(geo, buf.origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64),
-                    float(camera.far), buf.depth, buf.distance, buf.normal, buf.object_id)
+    args = (geo, buf.origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth,
+            buf.distance, buf.normal, buf.object_id)
+    _raycast_kernel(*args, work(_cast_rows, COUNTER, *args))
     return buf

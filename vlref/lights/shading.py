@@ -30,7 +30,7 @@ from numba import njit, prange
 
 from ..geometry import shadow_transmittance, traversal_stack
 from ..numeric import cast
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
 from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
@@ -114,11 +114,15 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left, each pixel's scene colour
     (module docstring) computed from the G-buffer's stored buffers: the surface point ``o + t d`` and the object's
     albedo and emission computed where they are read (the bits of the G-buffer's derived ``position``, ``albedo``
-    and ``emission``); one traversal stack for all of a worker's shadow rays."""
+    and ``emission``); one traversal stack for all of a worker's shadow rays. The arrays are borrowed
+    (:func:`vlref.parallel.borrowed`: every shadow ray passes the geometry on)."""
     h, w = object_id.shape
     y = take(taken)
     if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
         return
+    geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky, out = (
+        borrowed((geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient,
+                  sky, out)))
     inv_pi = 1.0 / math.pi
     ox, oy, oz = origin[0], origin[1], origin[2]
     stack = traversal_stack()
@@ -154,16 +158,15 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky,
-           out):
-    """The scene colour: every worker shades the rows it takes (:func:`_shade_rows`) on borrowed arrays (as the
-    G-buffer's ray cast does, :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads
-    counting references to the same geometry arrays on every shadow ray contend for their counters)."""
+           out, shade_rows):
+    """The scene colour: every worker shades the rows it takes (``shade_rows``: :func:`_shade_rows` by address,
+    :func:`vlref.parallel.work`), which borrows the arrays (as the G-buffer's ray cast does,
+    :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads counting references to the same
+    geometry arrays on every shadow ray contend for their counters)."""
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        g, li, st, o, d, ds, n, ids, a, e, am, sk, c = borrowed((geo, lights, strength, origin, dirs, distance, normal,
-                                                                 object_id, obj_albedo, obj_emission, ambient, sky,
-                                                                 out))
-        _shade_rows(taken, g, li, st, o, d, ds, n, ids, a, e, am, sk, c)
+        shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
+                   ambient, sky, out)
 
 
 def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
@@ -172,8 +175,8 @@ def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     out = np.empty(gbuffer.normal.shape)
     strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 0.0
                          for li in scene.lights], dtype=np.float64)
-    _shade(geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
-           gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
-           np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64),
-           out)
+    args = (geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
+            gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
+            np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64), out)
+    _shade(*args, work(_shade_rows, COUNTER, *args))
     return out

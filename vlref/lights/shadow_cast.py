@@ -27,7 +27,7 @@ from numba import njit, prange
 
 from ..camera import Camera
 from ..geometry import EVERY_SURFACE, OPAQUE_ONLY, RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_POINT, KIND_SPOT, PackedLights)
 from .shadow_pack import (CUBE_AXES, CUBE_FACES, FILTER_MODES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
@@ -97,11 +97,13 @@ def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out,
     """Chunks of ``RAY_CHUNK`` texels of one face taken one at a time (:func:`vlref.parallel.take`) until none is
     left: each texel's ray (:func:`_face_ray`), the chunk's first opaque hits (:func:`closest_hits`) stored as
     biased distances; with ``want_tint`` the first transparent surface in front of that hit and the colour of
-    every transparent crossing before it (:func:`shadow_transmittance`)."""
+    every transparent crossing before it (:func:`shadow_transmittance`). The arrays are borrowed
+    (:func:`vlref.parallel.borrowed`)."""
     n = res * res
     s = take(taken) * RAY_CHUNK
     if s >= n:  # before any allocation: most of the WORKERS iterations find no chunk left
         return
+    geo, face, out, tint = borrowed((geo, face, out, tint))
     origins, dirs, start, tmax = np.empty((RAY_CHUNK, 3)), np.empty((RAY_CHUNK, 3)), np.empty(RAY_CHUNK), np.empty(
         RAY_CHUNK)
     t, obj, normal = np.empty(RAY_CHUNK), np.empty(RAY_CHUNK, dtype=np.int64), np.empty((RAY_CHUNK, 3))
@@ -130,15 +132,14 @@ def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out,
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
+def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint, cast_chunks):
     """Per texel of one face (:func:`_face_ray`): biased distance ``start + t`` to the first opaque hit (inf if
     none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour.
-    Every worker casts the chunks it takes (:func:`_cast_chunks`) on borrowed arrays (module docstring,
-    "Performance")."""
+    Every worker casts the chunks it takes (``cast_chunks``: :func:`_cast_chunks` by address,
+    :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        g, f, o, t = borrowed((geo, face, out, tint))
-        _cast_chunks(taken, g, f, ortho, res, bias, slope_bias, want_tint, o, t)
+        cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out, tint)
 
 
 @njit(cache=True, fastmath=False)
@@ -218,7 +219,8 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
         for name, face, ortho in faces:
             out = np.empty(res * res, dtype=np.float32)
             tint = np.empty((res * res if want_tint else 0, 4), dtype=np.float32)
-            _cast_face(geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, out, tint)
+            args = (geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, out, tint)
+            _cast_face(*args, work(_cast_chunks, COUNTER, *args))
             chunks.append(out)
             tints.append(tint)
             names.append((name, i, offset, res * res))

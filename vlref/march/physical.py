@@ -119,7 +119,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..phase import hg
 from .segments import light_segment
 
@@ -586,8 +586,10 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
     """Take tasks, tiles of ``TILE_W x TILE_H`` pixels of the rows ``rows = (first, end)`` in row-major order of
     tiles (:func:`vlref.parallel.take` on ``taken``), until none is left; per task, its pixels' transmittance,
     then per light its pairs with a non-empty segment in packets of up to ``LANES``, set up by :func:`_setup`
-    (module docstring)."""
+    (module docstring). The arrays are borrowed (:func:`vlref.parallel.borrowed`)."""
     prefer_wide_vectors()
+    origin, dirs, t_end, offsets, medium, lights, shadows, geo, per_light, transmittance = borrowed(
+        (origin, dirs, t_end, offsets, medium, lights, shadows, geo, per_light, transmittance))
     mp, lattice = medium.params, medium.noise
     ox, oy, oz = origin[0], origin[1], origin[2]
     first, end = rows
@@ -637,7 +639,6 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
                               leg_steps, per_light)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
                    per_light, transmittance, rows):
     """Fill the rows ``rows = (first, end)`` (int64, ``first <= end <= H``) of ``per_light`` (n_lights, H, W, 3)
@@ -658,8 +659,21 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     :data:`~vlref.parallel.WORKERS` take tasks on demand until none is left (:mod:`vlref.parallel`: a
     pixel's cost varies from nothing to hundreds of samples, and ``prange``'s own split is static), each
     marched in packets of up to ``LANES`` (pixel, light) pairs. The workers get the arrays without reference
-    counts (:func:`vlref.parallel.borrowed`: the stages take the records on every step).
+    counts (:func:`vlref.parallel.borrowed`: the stages take the records on every step). The kernel
+    (:func:`_march_kernel`) calls :func:`_march_tasks` by address (:func:`vlref.parallel.work`), which borrows
+    them.
     """
+    march_tasks = work(_march_tasks, COUNTER, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets,
+                       medium, lights, shadows, geo, per_light, transmittance)
+    _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
+                  per_light, transmittance, rows, march_tasks)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
+def _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
+                  per_light, transmittance, rows, march_tasks):
+    """:func:`march_physical`'s parallel kernel: its checks, then workers that call ``march_tasks``
+    (:func:`_march_tasks` by address)."""
     if geo is None:
         for k in range(shadows.ints.shape[0]):
             if shadows.ints[k, S_MODE] == SHADOW_EXACT:
@@ -668,6 +682,5 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
         raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        o, d, te, off, med, lts, shd, gg, out, tr = borrowed((origin, dirs, t_end, offsets, medium, lights, shadows,
-                                                              geo, per_light, transmittance))
-        _march_tasks(taken, rows, steps, light_extinction, leg_steps, o, d, te, off, med, lts, shd, gg, out, tr)
+        march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights,
+                    shadows, geo, per_light, transmittance)
