@@ -283,7 +283,8 @@ def enter_root(node_min, node_max, ray, tmin, tmax, stack):
     :func:`traversal_stack` when it is None)."""
     ox, oy, oz, dx, dy, dz = ray
     ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    entered = node_min.shape[0] > 0 and ray_box(node_min, node_max, 0, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF
+    root = np.int64(0)  # not the literal 0, nor the int32 of node_first: ray_box compiles once, for int64
+    entered = node_min.shape[0] > 0 and ray_box(node_min, node_max, root, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF
     if stack is None:
         stack = traversal_stack()
     return entered, ix, iy, iz, stack
@@ -371,7 +372,7 @@ def bvh_closest(node_min, node_max, node_first, node_count, v0, e1, e2, opaque, 
                         best, found = t, i
             node = -1
         else:
-            node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
+            node, top = descend(node_min, node_max, np.int64(node_first[node]), ox, oy, oz, ix, iy, iz, tmin, best,
                                 nodes, stack_t, top)
         node, top = pop_nearer(nodes, stack_t, top, node, best)
         if node < 0:

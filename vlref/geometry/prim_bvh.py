@@ -76,7 +76,7 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
                     best, best_k, nx, ny, nz = t, k, ax, ay, az
             node = -1
         else:
-            node, top = descend(node_min, node_max, node_first[node], ox, oy, oz, ix, iy, iz, tmin, best,
+            node, top = descend(node_min, node_max, np.int64(node_first[node]), ox, oy, oz, ix, iy, iz, tmin, best,
                                 nodes, stack_t, top)
         node, top = pop_nearer(nodes, stack_t, top, node, best)
         if node < 0:

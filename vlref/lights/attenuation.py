@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ..numeric import cast
@@ -51,8 +52,9 @@ def unity_lut_lookup(lut, u):
     (Unity ``GetPixels`` order). A (1, w) LUT is a 1D table over ``u ∈ [0, 1]``.
     """
     h, w = lut.shape
-    c0, c1, fc = filter_taps(u, w, False)
-    r0, r1, fr = filter_taps(u, h, False)
+    clamp = np.bool_(False)  # not the literal False: filter_taps then compiles once, as for the cookies
+    c0, c1, fc = filter_taps(u, w, clamp)
+    r0, r1, fr = filter_taps(u, h, clamp)
     top = lut[r0, c0] * (1.0 - fc) + lut[r0, c1] * fc
     bot = lut[r1, c0] * (1.0 - fc) + lut[r1, c1] * fc
     return cast(u, top * (1.0 - fr) + bot * fr)

@@ -103,9 +103,10 @@ def sample_texture(texels, offset, w, h, repeat, nearest, u, v):
     r0, r1, fr = filter_taps(v, h, repeat)
     w00, w01, w10, w11 = (1.0 - fc) * (1.0 - fr), fc * (1.0 - fr), (1.0 - fc) * fr, fc * fr
     k00, k01, k10, k11 = offset + r0 * w + c0, offset + r0 * w + c1, offset + r1 * w + c0, offset + r1 * w + c1
-    return (_blend(texels, 0, k00, k01, k10, k11, w00, w01, w10, w11),
-            _blend(texels, 1, k00, k01, k10, k11, w00, w01, w10, w11),
-            _blend(texels, 2, k00, k01, k10, k11, w00, w01, w10, w11))
+    red, green, blue = np.int64(0), np.int64(1), np.int64(2)  # not literals: _blend compiles once, not per channel
+    return (_blend(texels, red, k00, k01, k10, k11, w00, w01, w10, w11),
+            _blend(texels, green, k00, k01, k10, k11, w00, w01, w10, w11),
+            _blend(texels, blue, k00, k01, k10, k11, w00, w01, w10, w11))
 
 
 @njit(cache=True, fastmath=False)
