@@ -1,14 +1,14 @@
-"""vlref.parallel: tasks handed out on demand (each exactly once, whatever the threads), and borrowed records
-(the same data, no reference counts)."""
+"""vlref.parallel: tasks handed out on demand (each exactly once, whatever the threads), borrowed records
+(the same data, no reference counts), and work called by address (the same result, not linked into the kernel)."""
 
 import numba
 import numpy as np
 import pytest
-from numba import njit, prange
+from numba import njit, prange, types
 from numba.core.errors import TypingError
 
 from vlref.lights.pack import PackedLights
-from vlref.parallel import WORKERS, borrowed, take
+from vlref.parallel import COUNTER, WORKERS, borrowed, take, work
 
 
 @njit(parallel=True)
@@ -80,3 +80,42 @@ def test_only_arrays_numbers_and_none_can_be_borrowed():
         go(numba.typed.List([1.0, 2.0]))
     with pytest.raises(TypingError, match="1-d int64 array"):
         njit(lambda c: take(c))(np.zeros(1, dtype=np.int32))
+
+
+@njit
+def _count_tasks(taken, n_tasks, hits):
+    while True:
+        task = take(taken)
+        if task >= n_tasks:
+            return
+        hits[task] += 1
+
+
+@njit(parallel=True)
+def _count_linked(n_tasks, hits):
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        _count_tasks(taken, n_tasks, hits)
+
+
+@njit(parallel=True)
+def _count_by_address(n_tasks, hits, count_tasks):
+    taken = np.zeros(1, dtype=np.int64)
+    for _ in prange(WORKERS):
+        count_tasks(taken, n_tasks, hits)
+
+
+def test_work_called_by_address_does_the_same_and_is_not_linked_into_the_kernel():
+    """A kernel that calls its work by address (``work``) takes every task once, as the kernel calling it directly
+    does; the work's code is in the direct kernel's LLVM module and not in the other's (what the compile saves)."""
+    linked, by_address = np.zeros(5000, dtype=np.int64), np.zeros(5000, dtype=np.int64)
+    _count_linked(5000, linked)
+    count_tasks = work(_count_tasks, COUNTER, 5000, by_address)
+    _count_by_address(5000, by_address, count_tasks)
+    assert np.all(linked == 1) and np.all(by_address == 1)
+    assert work(_count_tasks, COUNTER, 5000, by_address) is count_tasks  # kept per function and types
+    assert work(_count_tasks, COUNTER, 5000, np.zeros(3, dtype=np.int32)) is not count_tasks
+    (signature,) = _count_by_address.signatures
+    assert isinstance(signature[-1], types.FunctionType)
+    assert "_count_tasks" in _count_linked.inspect_llvm(_count_linked.signatures[0])
+    assert "_count_tasks" not in _count_by_address.inspect_llvm(signature)

@@ -19,6 +19,7 @@ from pathlib import Path
 import numba
 import numpy as np
 import pytest
+from numba import types
 
 import vlref
 from vlref import progress
@@ -275,14 +276,21 @@ def test_warmup_command_runs_every_task_and_reports_its_time(tmp_path):
 def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name, extra):
     """``vlref render`` compiles later stages ahead on 1×1 frames with no objects (and a G-buffer of sky, no
     shadow maps but the stage's own): each must have exactly the types of the real frame's call, or the real
-    render would compile again."""
+    render would compile again; so must the work each kernel calls by address (vlref.parallel.work)."""
+    from vlref.geometry.raycast import _cast_rows
+    from vlref.lights.shading import _shade_rows
+    from vlref.lights.shadow_cast import _cast_chunks
+    from vlref.march.physical import _march_tasks
     from vlref.post.composite import _composite, _sum_lights
     from vlref.warmup import AHEAD, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
     called = {stage: set(kernel.signatures) for stage, (_, kernel) in AHEAD.items()}
-    after_march = {kernel: set(kernel.signatures) for kernel in (_composite, _sum_lights)}  # the march stage's too
+    for stage, (_, kernel) in AHEAD.items():
+        assert all(isinstance(sig[-1], types.FunctionType) for sig in kernel.signatures), stage  # work by address
+    also = (_composite, _sum_lights, _march_tasks, _cast_chunks, _cast_rows, _shade_rows)  # the march's, the work
+    after_march = {kernel: set(kernel.signatures) for kernel in also}
     for stage, (_, kernel) in AHEAD.items():
         compile_stage(stage, scene)
         assert set(kernel.signatures) == called[stage], stage
