@@ -182,6 +182,7 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     floats = np.zeros((n, NSF))
     chunks, tints, names = [], [], []
     offset = 0
+    cast_chunks = None  # the work of _cast_face (vlref.parallel.work), looked up once
     for i, light in enumerate(scene.lights):
         sh = light.shadows
         if sh is None or not sh.enabled:
@@ -219,8 +220,9 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
         for name, face, ortho in faces:
             out = np.empty(res * res, dtype=np.float32)
             tint = np.empty((res * res if want_tint else 0, 4), dtype=np.float32)
-            args = (geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, out, tint)
-            _cast_face(*args, work(_cast_chunks, COUNTER, *args))
+            args = (geo, face, bool(ortho), int(res), float(sh.bias), float(sh.slope_bias), want_tint, out, tint)
+            cast_chunks = cast_chunks or work(_cast_chunks, COUNTER, *args)  # every face's arguments have these types
+            _cast_face(*args, cast_chunks)
             chunks.append(out)
             tints.append(tint)
             names.append((name, i, offset, res * res))
