@@ -25,22 +25,12 @@ import sys
 import tempfile
 import time
 
-COLD = r'''
-import gc, json, pickle, resource, sys, tempfile, time
-t0 = time.perf_counter()
-from vlref.cli.commands import command
-render_to_folder = command("render").render_to_folder
-gc.freeze()
-t1 = time.perf_counter()
-with open(sys.argv[1], "rb") as fh:
-    scene = pickle.load(fh)
-with tempfile.TemporaryDirectory() as folder:
-    result, _, write_s, _ = render_to_folder(scene, folder + "/out")
-t2 = time.perf_counter()
+CPU = r'''
+import resource
 own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
-print(json.dumps({"import_s": t1 - t0, "stages": result.timings, "in_process_s": t2 - t0,
-                  "cpu_main_s": own.ru_utime + own.ru_stime, "cpu_children_s": children.ru_utime + children.ru_stime}))
+print(json.dumps({"cpu_main_s": own.ru_utime + own.ru_stime, "cpu_children_s": children.ru_utime + children.ru_stime}))
 '''
+"""Appended to ``vlref.bench.renders._WHOLE`` (the first render's child): the CPU seconds of its processes."""
 
 WARM = r'''
 import json, sys
@@ -82,7 +72,8 @@ def _run(tree: str, code: str, args: list, cache: str, threads: int | None) -> d
     proc = subprocess.run([*pin, sys.executable, "-c", code, *args], env=env, capture_output=True, text=True, cwd="/tmp")
     if proc.returncode:
         raise SystemExit(f"{tree}: {proc.stderr[-3000:]}")
-    report = json.loads(proc.stdout.strip().splitlines()[-1])
+    lines = proc.stdout.strip().splitlines()
+    report = {**json.loads(lines[-2]), **json.loads(lines[-1])} if code.endswith(CPU) else json.loads(lines[-1])
     report["process_s"] = time.perf_counter() - start
     return report
 
@@ -95,6 +86,7 @@ def main(what: str, tree_a: str, tree_b: str, rounds: str = "2", threads: str = 
          height: str = "1080") -> None:
     sys.path.insert(0, os.path.abspath(tree_a))
     from vlref.bench.config import bench_scene
+    from vlref.bench.renders import _WHOLE
     trees, cap = {"A": tree_a, "B": tree_b}, int(threads) or None
     work = tempfile.mkdtemp(prefix="vlref_cold_work_ab_")
     try:
@@ -106,7 +98,7 @@ def main(what: str, tree_a: str, tree_b: str, rounds: str = "2", threads: str = 
                 cache = os.path.join(work, f"nc-{label}")  # warm: the cache of the tree's last cold run, if any
                 if kind == "cold":
                     shutil.rmtree(cache, ignore_errors=True)
-                    report = _run(trees[label], COLD, [scene_file], cache, cap)
+                    report = _run(trees[label], _WHOLE + CPU, [scene_file], cache, cap)
                 else:
                     report = _run(trees[label], WARM, [width, height], cache, cap)
                 print(label, kind, json.dumps(report), flush=True)
