@@ -24,13 +24,14 @@ body calls the function that does the work (the row or task function). Called as
 function, that function's whole call tree is linked into the caller's LLVM module, and Numba optimises and
 generates machine code for each module it builds, callees included: a ``prange`` builds four (the loop body's
 gufunc, its two wrappers, the kernel), so the work's call tree was optimised and code-generated four more
-times in every parallel kernel (a cold compile of the march: 4.3 s of its 10 s of LLVM; BENCHMARKS.md "Cold first
+times in every parallel kernel (a cold compile of the march: 4.9 s of its 12 s of LLVM; BENCHMARKS.md "Cold first
 render on two cores, second round"). The kernels take the work as an argument instead, a Numba first-class
 function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types): the
-shell calls it through that address, and only the work's own module holds its code. Same machine code for the
-work (the same function, optimised once instead of re-optimised: IEEE arithmetic either way), one indirect
-call per worker. The work must not raise: through its C wrapper an exception is printed, not propagated (the
-kernels check their arguments before the ``prange``).
+shell calls it through that address, and only the work's own module holds its code. The work runs its own
+module's machine code (optimised once instead of again in every caller: IEEE arithmetic either way, the same
+bits), one indirect call per worker. The work borrows its arrays itself (a ``borrowed`` tuple in the ``prange``
+body cost the gufunc 0.4-0.9 s of LLVM function passes). It must not raise: through its C wrapper an exception
+is printed, not propagated (the kernels check their arguments before the ``prange``).
 """
 
 from __future__ import annotations
