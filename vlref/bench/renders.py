@@ -82,9 +82,8 @@ def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: 
 _WHOLE = """
 import gc, json, pickle, sys, tempfile, time
 t0 = time.perf_counter()
-from vlref.cli.commands import command, exit_at_once
-render_to_folder = command("render").render_to_folder  # the modules `vlref render` imports, no more
-gc.freeze()  # as the vlref program does (vlref.cli.commands.main)
+from vlref.cli.commands import exit_at_once, program_command
+render_to_folder = program_command("render").render_to_folder  # what `vlref render` imports, as it imports it
 t1 = time.perf_counter()
 with open(sys.argv[1], "rb") as fh:
     scene = pickle.load(fh)
