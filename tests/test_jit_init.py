@@ -48,6 +48,21 @@ print(json.dumps({"have_blas": numba.np.arraymath._HAVE_BLAS,
                   "cython_blas": sys.modules.get("scipy.linalg.cython_blas") is not None}))
 """
 
+NOT_LOADABLE = r"""
+import importlib.util, json, sys
+from vlref import jit_init
+
+
+def refuse(spec):  # loading the extension on its own fails (the import system's own path does not use this name)
+    raise ImportError("refused")
+
+
+importlib.util.module_from_spec = refuse
+jit_init.initialise_numba()
+import numba.np.arraymath
+print(json.dumps({"have_blas": numba.np.arraymath._HAVE_BLAS, "scipy.linalg": "scipy.linalg" in sys.modules}))
+"""
+
 
 def _state(code: str) -> dict:
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -66,3 +81,7 @@ def test_a_render_leaves_scipy_linalg_unimported_and_user_linear_algebra_works()
 def test_with_scipy_linalg_already_imported_numba_initialises_as_usual():
     state = _state(LINALG_FIRST)
     assert state == {"have_blas": True, "cython_blas": True}
+
+
+def test_where_the_extension_cannot_be_loaded_alone_numba_initialises_as_usual():
+    assert _state(NOT_LOADABLE) == {"have_blas": True, "scipy.linalg": True}
