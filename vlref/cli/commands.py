@@ -160,9 +160,10 @@ def main(argv: list[str] | None = None) -> int:
 
     ``argv`` None: the program's own command line (the ``vlref`` executable, ``python -m vlref``), whose process
     ends with the command. Its modules are imported with the collector off (:func:`program_command`); the objects
-    that exist once they are imported, and again once it has run, are then frozen out of the garbage collector's sight (:func:`gc.freeze`): later collections do not
-    walk NumPy's and Numba's modules and the loaded kernels' type records (~130 000 objects) again, and neither
-    does the interpreter's exit (a render's exit: 0.5-0.6 s on the dev box, 0.1 s frozen). A command of
+    that exist once they are imported, and again once it has run, are then frozen out of the garbage collector's
+    sight (:func:`gc.freeze`): later collections do not walk NumPy's and Numba's modules and the loaded kernels'
+    type records (~130 000 objects) again, and neither does the interpreter's exit (a render's exit: 0.5-0.6 s on
+    the dev box, 0.1 s frozen). A command of
     :data:`EXIT_AT_ONCE` then ends the process at once (:func:`exit_at_once`), without the tear-down of every
     module and loaded kernel."""
     program = argv is None
