@@ -25,12 +25,13 @@ load raising, a Numba without ``numba.core.registry.cpu_target``), Numba initial
 
 from __future__ import annotations
 
+import contextlib
 import importlib.machinery
 import importlib.util
 import os
 import sys
 
-from numba.core import registry
+from numba.core import compiler_lock, registry
 
 __all__ = ["initialise_numba", "BLAS_MODULE"]
 
@@ -58,24 +59,26 @@ def _cython_blas_alone():
 
 def initialise_numba() -> None:
     """Initialise Numba's CPU target now (what the first compiled call would do), with its BLAS check served by
-    ``scipy.linalg.cython_blas`` alone (module docstring). Idempotent; thread-safe as Numba's own first call is
-    (the main thread's first kernel)."""
+    ``scipy.linalg.cython_blas`` alone (module docstring). Idempotent. It holds Numba's compiler lock while it
+    runs, as Numba's own loading of a cached kernel does, so a kernel loaded or compiled meanwhile on another
+    thread waits for it."""
     if _done[0]:
         return
     _done[0] = True
     cpu_target = getattr(registry, "cpu_target", None)
     if cpu_target is None:  # a Numba without it: its first kernel initialises it
         return
-    module = None
-    if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
-            and BLAS_MODULE not in sys.modules:
-        module = _cython_blas_alone()
-    if module is None:
-        cpu_target.target_context.refresh()
-        return
-    sys.modules[BLAS_MODULE] = module
-    try:
-        cpu_target.target_context.refresh()
-    finally:
-        if sys.modules.get(BLAS_MODULE) is module:
-            del sys.modules[BLAS_MODULE]
+    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext():
+        module = None
+        if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
+                and BLAS_MODULE not in sys.modules:
+            module = _cython_blas_alone()
+        if module is None:
+            cpu_target.target_context.refresh()
+            return
+        sys.modules[BLAS_MODULE] = module
+        try:
+            cpu_target.target_context.refresh()
+        finally:
+            if sys.modules.get(BLAS_MODULE) is module:
+                del sys.modules[BLAS_MODULE]
