@@ -85,7 +85,7 @@ class GBuffer:
 
 def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
     """(H, W, 3): row ``object_id`` of the (M, 3) ``table`` per pixel, 0 where ``object_id`` is -1."""
-    return np.concatenate([table, np.zeros((1, 3))])[object_id]
+    return np.take(np.concatenate([table, np.zeros((1, 3))]), object_id, axis=0)  # fancy indexing's copies, 2x faster
 
 
 @njit(cache=True, fastmath=False)
