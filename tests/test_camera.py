@@ -5,8 +5,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vlref.camera import (RAY_BLOCK_ROWS, Camera, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
+from vlref.camera import (Camera, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
                           unity_linear_eye_depth, zbuffer_params)
+from vlref.row_blocks import BLOCK_ROWS
 
 near_far = st.tuples(st.floats(0.01, 10.0), st.floats(1.5, 1e4)).map(lambda nf: (nf[0], nf[0] * nf[1]))
 
@@ -84,7 +85,7 @@ def whole_frame_rays(cam, width, height):
 def test_rays_in_blocks_on_threads_have_the_bits_of_the_whole_frame_expression():
     # matmul calls BLAS once per row and the rest is per pixel: any block split or thread count, the same bits
     rng = np.random.default_rng(7)
-    heights = (1, RAY_BLOCK_ROWS - 1, RAY_BLOCK_ROWS, RAY_BLOCK_ROWS + 1, 3 * RAY_BLOCK_ROWS + 5, 121)
+    heights = (1, BLOCK_ROWS - 1, BLOCK_ROWS, BLOCK_ROWS + 1, 3 * BLOCK_ROWS + 5, 121)
     for k, h in enumerate(heights):
         rot = euler_matrix(rng.uniform(-180.0, 180.0, 3)) if k % 2 else look_rotation(rng.normal(size=3))
         w = int(rng.integers(1, 300))

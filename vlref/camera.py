@@ -21,17 +21,16 @@ Conventions (``docs/CONVENTIONS.md``):
 
 from __future__ import annotations
 
-import concurrent.futures
 from dataclasses import dataclass, field
 
-import numba
 import numpy as np
+
+from .row_blocks import in_row_blocks
 
 DEPTH_CONVENTIONS = ("d3d", "gl", "reversed")
 
 __all__ = ["Camera", "euler_matrix", "look_rotation", "linear_to_raw", "raw_to_linear", "zbuffer_params",
-           "unity_linear_eye_depth", "DEPTH_CONVENTIONS", "camera_from_settings", "pixel_rays",
-           "RAY_BLOCK_ROWS"]
+           "unity_linear_eye_depth", "DEPTH_CONVENTIONS", "camera_from_settings", "pixel_rays"]
 
 
 def euler_matrix(degrees) -> np.ndarray:
@@ -153,7 +152,7 @@ class Camera:
         key = (self.width if width is None else width, self.height if height is None else height)
         rays = self._rays.get(key)
         if rays is None:
-            rays = pixel_rays(self, *key, numba.get_num_threads())
+            rays = pixel_rays(self, *key)
             self._rays[key] = rays
         return rays.copy() if copy else rays
 
@@ -169,37 +168,26 @@ class Camera:
         return depth / (d @ self.forward)
 
 
-RAY_BLOCK_ROWS = 16
-"""Rows of :func:`pixel_rays`' blocks: each block's temporaries (~0.7 MB at 1920 wide) stay in a core's cache."""
-
-
-def pixel_rays(camera: Camera, width: int, height: int, threads: int = 1) -> np.ndarray:
+def pixel_rays(camera: Camera, width: int, height: int, threads: int | None = None) -> np.ndarray:
     """:meth:`Camera.ray_directions` of a ``width x height`` target, computed anew: (H, W, 3) float64.
 
     Per pixel ``d = (nx tan·aspect, ny tan, 1) R^T``, ``d / |d|`` (NumPy's ``stack``, ``matmul`` and
-    ``linalg.norm``, as written here). They run on blocks of :data:`RAY_BLOCK_ROWS` whole rows, written into
-    the result, the blocks spread over ``threads`` threads (NumPy releases the GIL in its loops). ``matmul``
-    of an (rows, W, 3) stack calls BLAS once per row, and the other operations are per pixel, so every
-    block size and thread count gives the bits of the whole frame at once (tests/test_camera.py); only the
-    temporaries shrink, from ~250 MB at 1080p, whose first touch dominated, to a few cache-sized blocks.
+    ``linalg.norm``, as written here), on blocks of whole rows written into the result, the blocks spread over
+    ``threads`` threads (:func:`vlref.row_blocks.in_row_blocks`; default Numba's thread count). ``matmul`` of a
+    (rows, W, 3) stack calls BLAS once per row and the other operations are per pixel, so every block split and
+    thread count gives the bits of the whole frame computed at once (tests/test_camera.py); BLAS's kernel may
+    still differ between machines.
     """
     nx, ny = camera.pixel_ndc(width, height)
     t, aspect, rotation_t = camera.tan_half_fov, camera.aspect, camera.rotation.T
     rays = np.empty((height, width, 3))
 
-    def block(y0: int) -> None:
-        x, y = nx[y0:y0 + RAY_BLOCK_ROWS], ny[y0:y0 + RAY_BLOCK_ROWS]
+    def block(y0: int, y1: int) -> None:
+        x, y = nx[y0:y1], ny[y0:y1]
         d = np.stack([x * t * aspect, y * t, np.ones_like(x)], axis=-1) @ rotation_t
-        np.divide(d, np.linalg.norm(d, axis=-1, keepdims=True), out=rays[y0:y0 + RAY_BLOCK_ROWS])
+        np.divide(d, np.linalg.norm(d, axis=-1, keepdims=True), out=rays[y0:y1])
 
-    starts = range(0, height, RAY_BLOCK_ROWS)
-    workers = max(1, min(int(threads), len(starts)))
-    if workers == 1:
-        for y0 in starts:
-            block(y0)
-    else:
-        with concurrent.futures.ThreadPoolExecutor(workers) as pool:
-            list(pool.map(block, starts))
+    in_row_blocks(height, block, threads)
     return rays
 
 
