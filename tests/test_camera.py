@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from vlref.camera import (Camera, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
                           unity_linear_eye_depth, zbuffer_params)
-from vlref.row_blocks import BLOCK_ROWS
+from vlref.row_blocks import MAX_BLOCK_ROWS
 
 near_far = st.tuples(st.floats(0.01, 10.0), st.floats(1.5, 1e4)).map(lambda nf: (nf[0], nf[0] * nf[1]))
 
@@ -85,14 +85,14 @@ def whole_frame_rays(cam, width, height):
 def test_rays_in_blocks_on_threads_have_the_bits_of_the_whole_frame_expression():
     # matmul calls BLAS once per row and the rest is per pixel: any block split or thread count, the same bits
     rng = np.random.default_rng(7)
-    heights = (1, BLOCK_ROWS - 1, BLOCK_ROWS, BLOCK_ROWS + 1, 3 * BLOCK_ROWS + 5, 121)
+    heights = (1, 2, 17, MAX_BLOCK_ROWS, MAX_BLOCK_ROWS + 1, 2 * MAX_BLOCK_ROWS + 45)
     for k, h in enumerate(heights):
         rot = euler_matrix(rng.uniform(-180.0, 180.0, 3)) if k % 2 else look_rotation(rng.normal(size=3))
         w = int(rng.integers(1, 300))
         cam = Camera(rng.normal(size=3), rot, float(rng.uniform(5.0, 150.0)), w, h, 0.1, 100.0)
         for size in ((w, h), (max(1, w // 2), max(1, h // 3))):
             expected = whole_frame_rays(cam, *size).tobytes()
-            for threads in (1, 2, 5):
+            for threads in (1, 2, 5, 16):
                 assert pixel_rays(cam, *size, threads).tobytes() == expected, (w, h, size, threads)
             assert cam.ray_directions(*size).tobytes() == expected
     cam = make_camera(w=1920, h=1080, rot=(4.0, -30.0, 0.0))

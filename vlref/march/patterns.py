@@ -18,8 +18,6 @@ import functools
 import numpy as np
 from numba import njit
 
-from ..row_blocks import BLOCK_ROWS, in_row_blocks
-
 PATTERNS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 
 
@@ -70,9 +68,6 @@ def offsets(pattern: str, width: int, height: int, seed: int = 0) -> np.ndarray:
         return _hash_offsets(width, height, seed)
     if pattern.startswith("bayer"):
         n = int(pattern[5:])
-        # one band of whole matrices (BLOCK_ROWS rows or n) copied into every block of that many rows, on threads
-        band = np.tile(_bayer_offsets(n), (max(1, BLOCK_ROWS // n), width // n + 1))[:, :width]
-        out = np.empty((height, width))
-        in_row_blocks(height, lambda y0, y1: np.copyto(out[y0:y1], band[:y1 - y0]), rows=band.shape[0])
-        return out
+        b = _bayer_offsets(n)
+        return np.tile(b, (height // n + 1, width // n + 1))[:height, :width].copy()
     raise ValueError(f"unknown sampling pattern {pattern!r}; use one of {PATTERNS}")
