@@ -27,7 +27,7 @@ import math
 import numpy as np
 from numba import get_num_threads, njit, prange
 
-from vlref.numeric import arrays_do_not_overlap, glibc_exp, prefer_wide_vectors
+from vlref.numeric import arrays_do_not_overlap, glibc_exp, glibc_exp_normal, prefer_wide_vectors
 from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
@@ -75,13 +75,39 @@ def _depth_weight(dz, code, factor, epsilon):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _depth_weights(tap, at, code, factor, epsilon, out):
+def _gaussian_weights(tap, at, factor, flags, out):
+    """``out[c] = exp(-(dz f)^2)`` (:func:`_gaussian_weight`, ``dz = dz(tap[c], at[c])``, ``f = factor``) in two loops:
+    a vectorised one, ``exp`` by :func:`~vlref.numeric.glibc_exp_normal` for arguments in ``[-708, 0]`` (about half
+    the work of :func:`~vlref.numeric.glibc_exp` in a vector lane) and 0 below ``-746`` (glibc's ``exp`` is 0 from
+    ``-745.14`` down), which marks the other lanes (subnormal results, NaN) in ``flags`` (bytes, read as 64-bit words:
+    at least ``out.size`` rounded up to 8); then one that redoes the marked lanes with :func:`_gaussian_weight`,
+    skipping each word of 8 unmarked lanes. The same bits as :func:`_gaussian_weight` on every lane."""
+    prefer_wide_vectors()
+    n = out.size
+    marks = flags.view(np.uint8)
+    for c in range(n):
+        s = depth_delta_at(tap[c], at[c]) * factor
+        x = -(s * s)
+        normal = x >= -708.0
+        out[c] = 0.0 if x < -746.0 else glibc_exp_normal(x if normal else 0.0)
+        marks[c] = np.uint8(0 if normal or x < -746.0 else 1)
+    for c in range(n, (n + 7) // 8 * 8):
+        marks[c] = 0
+    for word in range((n + 7) // 8):
+        if flags[word] != 0:
+            for c in range(8 * word, min(8 * word + 8, n)):
+                if marks[c] != 0:
+                    out[c] = _gaussian_weight(depth_delta_at(tap[c], at[c]), factor)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy")
+def _depth_weights(tap, at, code, factor, epsilon, flags, out):
     """``out[c] = W(dz(tap[c], at[c]))`` (:func:`_depth_weight`, :func:`depth_delta_at`) for every ``c``: one loop
-    per weight kind, which LLVM vectorises (NumPy's error model: ``epsilon > 0`` keeps the division finite)."""
+    per weight kind, which LLVM vectorises (NumPy's error model: ``epsilon > 0`` keeps the division finite); the
+    Gaussian's by :func:`_gaussian_weights` (``flags`` its scratch)."""
     prefer_wide_vectors()
     if code == _GAUSSIAN:
-        for c in range(out.size):
-            out[c] = _gaussian_weight(depth_delta_at(tap[c], at[c]), factor)
+        _gaussian_weights(tap, at, factor, flags, out)
     elif code == _UNIT:
         for c in range(out.size):
             out[c] = 1.0
@@ -144,7 +170,7 @@ cache (10 KiB) while the taps add to them."""
 
 
 @njit(cache=True, fastmath=False)
-def _pair_tables(z, r, axis, K, code, factor, epsilon, T, base):
+def _pair_tables(z, r, axis, K, code, factor, epsilon, flags, T, base):
     """The depth weights of line ``r`` (a row of ``z``) against its neighbours along ``axis``:
     ``T[base + m, c] = W(dz(z(p + m), z(p)))`` for ``m = 1..K`` (the neighbour clamped to the image), and
     ``T[base, c] = W(dz(z(p), z(p)))``, ``p`` the texel (row ``r``, column ``c``); vectorised
@@ -155,11 +181,11 @@ def _pair_tables(z, r, axis, K, code, factor, epsilon, T, base):
     for m in range(1, K + 1):
         if axis == 1:
             inside = max(W - m, 0)
-            _depth_weights(zr[m:], zr[:inside], code, factor, epsilon, T[base + m, :inside])
+            _depth_weights(zr[m:], zr[:inside], code, factor, epsilon, flags, T[base + m, :inside])
             for c in range(inside, W):
                 T[base + m, c] = _depth_weight(depth_delta_at(zr[W - 1], zr[c]), code, factor, epsilon)
         else:
-            _depth_weights(z[min(r + m, H - 1)], zr, code, factor, epsilon, T[base + m])
+            _depth_weights(z[min(r + m, H - 1)], zr, code, factor, epsilon, flags, T[base + m])
     same, nan = _depth_weight(0.0, code, factor, epsilon), _depth_weight(np.nan, code, factor, epsilon)
     for c in range(W):
         T[base, c] = same if zr[c] == zr[c] else nan  # dz(z, z): 0, or NaN for a NaN depth
@@ -224,12 +250,13 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
     acc = np.empty((C, _CHUNK))
     wsum = np.empty(_CHUNK)
+    flags = np.empty(W // 8 + 1, np.uint64)
     if axis == 0:
         for p in range(max(r0 - K, 0), min(r0 + K, H)):
             _planar_row(v, p, 0, rows[p % (2 * K + 1)])
     for r in range(r0 if axis == 1 else max(r0 - K, 0), r1):
         slot = r % (K + 1)
-        _pair_tables(z, r, axis, K, code, factor, epsilon, T, slot * S)
+        _pair_tables(z, r, axis, K, code, factor, epsilon, flags, T, slot * S)
         if r < r0:
             continue
         if axis == 1:
