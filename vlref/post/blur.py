@@ -236,6 +236,39 @@ def _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, end, c0, acc, wsum)
             acc[ch, np.uint64(c - c0)] += (gk * T[wrow, np.uint64(c + wshift)]) * rows[vrow, ch, np.uint64(c + vshift)]
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def _add_rgb_taps(ga, gb, T, weights, rows, values, first, end, c0, acc, wsum):
+    """Two consecutive taps ``a``, ``b`` of :func:`_add_tap` on three channels in one loop: ``wsum = (wsum + w_a) + w_b``
+    and ``acc = (acc + w_a v_a) + w_b v_b``, the same operations in the same order as two calls, the sums loaded and
+    stored once. ``weights = (wrow_a, wshift_a, wrow_b, wshift_b)``, ``values = (vrow_a, vshift_a, vrow_b, vshift_b)``
+    (:func:`_add_tap`'s ``wrow, wshift`` and ``vrow, vshift``)."""
+    arrays_do_not_overlap()
+    wa, sa, wb, sb = weights
+    va, ta, vb, tb = values
+    for c in range(first, end):
+        i, ja, jb = np.uint64(c - c0), np.uint64(c + ta), np.uint64(c + tb)
+        w1, w2 = ga * T[wa, np.uint64(c + sa)], gb * T[wb, np.uint64(c + sb)]
+        wsum[i] = (wsum[i] + w1) + w2
+        acc[0, i] = (acc[0, i] + w1 * rows[va, 0, ja]) + w2 * rows[vb, 0, jb]
+        acc[1, i] = (acc[1, i] + w1 * rows[va, 1, ja]) + w2 * rows[vb, 1, jb]
+        acc[2, i] = (acc[2, i] + w1 * rows[va, 2, ja]) + w2 * rows[vb, 2, jb]
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def _tap(t, K, axis, r, H, base, c0, c1):
+    """Tap ``t`` (0 the centre, then ``k = -K..-1``, ``1..K``) of row ``r`` in the stretch ``c0 <= c < c1``:
+    ``(k, vrow, vshift, first, wrow, wshift)``, the arguments of :func:`_add_tap` (``base``: the row's first table row
+    in ``T``); ``first > c0`` where the stretch's first columns take tap ``k < 0`` clamped to column 0 (horizontal)."""
+    k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
+    vrow, vshift = (0, K + k) if axis == 1 else (min(max(r + k, 0), H - 1) % (2 * K + 1), 0)
+    first, wrow, wshift = c0, base + abs(k), 0
+    if k < 0 and axis == 1:
+        first, wshift = min(max(c0, -k), c1), k
+    elif k < 0:
+        wrow = ((r + k) % (K + 1)) * (K + 1) - k if r + k >= 0 else r  # above row 0: row 0's pair (0, r)
+    return k, vrow, vshift, first, wrow, wshift
+
+
 @njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
 def _finish_stretch(acc, wsum, n, out, r, c0):
     """``out[r, c0 + i, ch] = acc[ch, i] / wsum[i]`` for ``i < n`` (vectorised: NumPy's error model, so a zero ``wsum``
@@ -288,21 +321,23 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
             for ch in range(C):
                 for i in range(c1 - c0):
                     acc[ch, i] = 0.0
-            for t in range(2 * K + 1):
-                k = 0 if t == 0 else (t - K - 1 if t <= K else t - K)
+            t = 0
+            while t < 2 * K + 1:
+                k, vrow, vshift, first, wrow, wshift = _tap(t, K, axis, r, H, slot * S, c0, c1)
+                if t < 2 * K and C == 3 and first == c0 and _tap(t + 1, K, axis, r, H, slot * S, c0, c1)[3] == c0:
+                    k2, vrow2, vshift2, _, wrow2, wshift2 = _tap(t + 1, K, axis, r, H, slot * S, c0, c1)
+                    _add_rgb_taps(g[abs(k)], g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
+                                  (vrow, vshift, vrow2, vshift2), first, c1, c0, acc, wsum)
+                    t += 2
+                    continue
                 gk = g[abs(k)]
-                vrow, vshift = (0, K + k) if axis == 1 else (min(max(r + k, 0), H - 1) % (2 * K + 1), 0)
-                first, wrow, wshift = c0, slot * S + abs(k), 0
-                if k < 0 and axis == 1:
-                    first, wshift = min(max(c0, -k), c1), k
-                    for c in range(c0, first):  # tap k of column c < -k is clamped to column 0: its pair (0, c)
-                        w = gk * T[slot * S + c, 0]
-                        wsum[c - c0] += w
-                        for ch in range(C):
-                            acc[ch, c - c0] += w * rows[0, ch, K + k + c]
-                elif k < 0:
-                    wrow = ((r + k) % (K + 1)) * S - k if r + k >= 0 else r  # above row 0: row 0's pair (0, r)
+                for c in range(c0, first):  # tap k < 0 of column c < -k is clamped to column 0: its pair (0, c)
+                    w = gk * T[slot * S + c, 0]
+                    wsum[c - c0] += w
+                    for ch in range(C):
+                        acc[ch, c - c0] += w * rows[0, ch, K + k + c]
                 _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, acc, wsum)
+                t += 1
             _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
 
 
