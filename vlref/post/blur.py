@@ -198,7 +198,6 @@ def _planar_row(v, r, pad, out):
     channels (RGB) are read as one flat line by a loop with the channels spelled out (0.48 against 0.31 ms for the
     planes of a 960x540 image on one dev-box thread)."""
     arrays_do_not_overlap()
-    prefer_wide_vectors()
     W, C = v.shape[1], v.shape[2]
     if C == 3:
         texels, red, green, blue = v[r].reshape(3 * W), out[0, pad:pad + W], out[1, pad:pad + W], out[2, pad:pad + W]
@@ -294,9 +293,7 @@ def _finish_stretch(acc, wsum, n, out, r, c0):
 @njit(cache=True, fastmath=False)
 def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
-    kernel small, which is most of its compile time). Its loops (the taps, the division, inlined) in the widest
-    vectors (:func:`~vlref.numeric.prefer_wide_vectors`)."""
-    prefer_wide_vectors()
+    kernel small, which is most of its compile time)."""
     H, W, C = v.shape
     K = g.size - 1
     S = K + 1
