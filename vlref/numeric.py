@@ -220,8 +220,10 @@ _TWO_1009, _TWO_M1022 = 2.0 ** 1009, 2.0 ** -1022
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def _glibc_exp_parts(x):
-    """``(ki, sbits, tmp)`` of glibc's ``exp`` for float64 ``x``: the reduction's ``k`` as the shifter's bits, the bits of
-    ``2^(k/128)`` before any special-case rescaling, and ``tmp`` with ``e^x ~= s + s tmp`` (:func:`glibc_exp`)."""
+    """``(ki, sbits, tmp, down, y_down)`` of glibc's ``exp`` for float64 ``x``: the reduction's ``k`` as the shifter's
+    bits, the bits of ``2^(k/128)`` before any special-case rescaling, ``tmp`` with ``e^x ~= s + s tmp``
+    (:func:`glibc_exp`), and its ``specialcase()`` for ``k < 0`` before the final scaling: ``s' = 2^1022 s`` and
+    ``y_down = s' + s' tmp`` (the product rounded on its own: the source uses it twice)."""
     kd = fma(np.float64(x), _GEXP_INV_LN2_N, _SHIFTER)
     ki = np.float64(kd).view(np.int64)
     kd = kd - _SHIFTER
@@ -231,15 +233,8 @@ def _glibc_exp_parts(x):
     sbits = _GEXP_TABLE[idx + 1] + (ki << 45)
     r2 = r * r
     tmp = fma(r2 * r2, fma(r, _GEXP_C5, _GEXP_C4), fma(r2, fma(r, _GEXP_C3, _GEXP_C2), tail + r))
-    return ki, sbits, tmp
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def _glibc_exp_scaled_down(sbits, tmp):
-    """glibc's ``specialcase()`` for ``k < 0`` before its final scaling: ``y = s' + s' tmp`` with ``s' = 2^1022 s``
-    (the product rounded on its own: the source uses it twice), and the ``s'`` for its subnormal branch."""
     down = np.int64(sbits + (1022 << 52)).view(np.float64)
-    return down, down + down * tmp
+    return ki, sbits, tmp, down, down + down * tmp
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
@@ -249,9 +244,8 @@ def glibc_exp_normal(x):
     NaN, which the lanes of a vector loop of :func:`glibc_exp` all compute (about half its work). ``|x| < 2^-54``
     needs no branch either: ``1 + x`` and the main path both round to 1. Any other argument gives a meaningless
     value (no trap), so a lane loop may call it on every lane and redo the others with :func:`glibc_exp`."""
-    ki, sbits, tmp = _glibc_exp_parts(x)
+    _, sbits, tmp, _, y_down = _glibc_exp_parts(x)
     scale = np.int64(sbits).view(np.float64)
-    down, y_down = _glibc_exp_scaled_down(sbits, tmp)
     return _TWO_M1022 * y_down if x <= -512.0 else fma(scale, tmp, scale)
 
 
@@ -276,13 +270,12 @@ def glibc_exp(x):
     """
     bits = np.float64(x).view(np.int64)
     abstop = (bits >> 52) & 0x7FF
-    ki, sbits, tmp = _glibc_exp_parts(x)
+    ki, sbits, tmp, down, y_down = _glibc_exp_parts(x)
     scale = np.int64(sbits).view(np.float64)
     y = fma(scale, tmp, scale)
     # |x| in [512, 1024): glibc's specialcase(), both signs of k
     up = np.int64(sbits - (1009 << 52)).view(np.float64)
     y_up = _TWO_1009 * fma(up, tmp, up)
-    down, y_down = _glibc_exp_scaled_down(sbits, tmp)
     lo = (down - y_down) + down * tmp
     hi = 1.0 + y_down
     lo = ((1.0 - hi) + y_down) + lo

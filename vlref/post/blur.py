@@ -324,8 +324,8 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
             t = 0
             while t < 2 * K + 1:
                 k, vrow, vshift, first, wrow, wshift = _tap(t, K, axis, r, H, slot * S, c0, c1)
-                if t < 2 * K and C == 3 and first == c0 and _tap(t + 1, K, axis, r, H, slot * S, c0, c1)[3] == c0:
-                    k2, vrow2, vshift2, _, wrow2, wshift2 = _tap(t + 1, K, axis, r, H, slot * S, c0, c1)
+                k2, vrow2, vshift2, first2, wrow2, wshift2 = _tap(min(t + 1, 2 * K), K, axis, r, H, slot * S, c0, c1)
+                if t < 2 * K and C == 3 and first == c0 and first2 == c0:
                     _add_rgb_taps(g[abs(k)], g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
                                   (vrow, vshift, vrow2, vshift2), first, c1, c0, acc, wsum)
                     t += 2
