@@ -10,8 +10,8 @@ import pytest
 from hypothesis import given, strategies as st
 from numba import njit
 
-from vlref.numeric import (_GEXP_TABLE, arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, is_float64,
-                           prefer_wide_vectors)
+from vlref.numeric import (_GEXP_TABLE, arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, glibc_exp_normal,
+                           is_float64, prefer_wide_vectors)
 
 
 @njit(cache=True)
@@ -165,6 +165,27 @@ def test_arrays_do_not_overlap_marks_the_arguments_and_keeps_the_bits():
 def _glibc_exps(xs, out):
     for i in range(xs.size):  # a lane loop: vectorised, as the bilateral blur's weights are
         out[i] = glibc_exp(xs[i])
+
+
+@njit(cache=True)
+def _glibc_exps_normal(xs, out):
+    for i in range(xs.size):  # a lane loop, as the bilateral blur's
+        out[i] = glibc_exp_normal(xs[i])
+
+
+def test_glibc_exp_normal_has_glibc_exps_bits_on_its_range():
+    # [-708, 512): glibc's main path and, for x <= -512, its special case's rescaled sum; the edges of both, the
+    # arguments that glibc sends to 1 + x, and where the rescaled sum is closest to 2^-1022
+    rng = np.random.default_rng(20)
+    tiny = rng.uniform(-(2.0**-54), 2.0**-54, 1000)
+    edges = [-708.0, np.nextafter(-708.0, 0.0), -512.0, np.nextafter(-512.0, 0.0), np.nextafter(-512.0, -1.0),
+             np.nextafter(512.0, 0.0), 0.0, -0.0, 2.0**-54, -(2.0**-54), 5e-324, -5e-324]
+    xs = np.concatenate([rng.uniform(-708.0, 512.0, 200_000), rng.uniform(-708.0, -500.0, 100_000), tiny, edges])
+    got, ref = np.empty_like(xs), np.empty_like(xs)
+    _glibc_exps_normal(xs, got)
+    _glibc_exps(xs, ref)
+    assert xs[got.view(np.int64) != ref.view(np.int64)].size == 0
+    assert np.all(got[xs <= -512.0] >= 2.0**-1022)
 
 
 def _libm_exp(x: float) -> float:

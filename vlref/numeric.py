@@ -34,7 +34,7 @@ from numba import njit, types
 from numba.extending import intrinsic, overload
 
 __all__ = ["cast", "zero_one", "is_float64", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
-           "glibc_exp"]
+           "glibc_exp", "glibc_exp_normal"]
 
 
 def cast(like, value):
@@ -224,6 +224,37 @@ _TWO_1009, _TWO_M1022 = 2.0 ** 1009, 2.0 ** -1022
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def _glibc_exp_parts(x):
+    """``(ki, sbits, tmp, down, y_down)`` of glibc's ``exp`` for float64 ``x``: the reduction's ``k`` as the shifter's
+    bits, the bits of ``2^(k/128)`` before any special-case rescaling, ``tmp`` with ``e^x ~= s + s tmp``
+    (:func:`glibc_exp`), and its ``specialcase()`` for ``k < 0`` before the final scaling: ``s' = 2^1022 s`` and
+    ``y_down = s' + s' tmp`` (the product rounded on its own: the source uses it twice)."""
+    kd = fma(np.float64(x), _GEXP_INV_LN2_N, _SHIFTER)
+    ki = np.float64(kd).view(np.int64)
+    kd = kd - _SHIFTER
+    r = fma(kd, _GEXP_NEG_LN2_LO_N, fma(kd, _GEXP_NEG_LN2_HI_N, x))
+    idx = 2 * (ki & 127)
+    tail = np.int64(_GEXP_TABLE[idx]).view(np.float64)
+    sbits = _GEXP_TABLE[idx + 1] + (ki << 45)
+    r2 = r * r
+    tmp = fma(r2 * r2, fma(r, _GEXP_C5, _GEXP_C4), fma(r2, fma(r, _GEXP_C3, _GEXP_C2), tail + r))
+    down = np.int64(sbits + (1022 << 52)).view(np.float64)
+    return ki, sbits, tmp, down, down + down * tmp
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def glibc_exp_normal(x):
+    """:func:`glibc_exp` for ``-708 <= x < 512``, where the result is a normal number: the same bits there, without
+    the branches for overflow, for results below ``2^-1022`` (glibc's extra rounding) and for ``|x| >= 1024``, inf and
+    NaN, which the lanes of a vector loop of :func:`glibc_exp` all compute (about half its work). ``|x| < 2^-54``
+    needs no branch either: ``1 + x`` and the main path both round to 1. Any other argument gives a meaningless
+    value (no trap), so a lane loop may call it on every lane and redo the others with :func:`glibc_exp`."""
+    _, sbits, tmp, _, y_down = _glibc_exp_parts(x)
+    scale = np.int64(sbits).view(np.float64)
+    return _TWO_M1022 * y_down if x <= -512.0 else fma(scale, tmp, scale)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def glibc_exp(x):
     """``e^x`` of a float64 with the bits of glibc's ``exp`` (glibc >= 2.28 on x86-64 CPUs with FMA: its
     ``__exp_fma``, the ``exp`` that ``math.exp`` and Numba's ``math.exp`` call there),
@@ -244,22 +275,12 @@ def glibc_exp(x):
     """
     bits = np.float64(x).view(np.int64)
     abstop = (bits >> 52) & 0x7FF
-    kd = fma(np.float64(x), _GEXP_INV_LN2_N, _SHIFTER)
-    ki = np.float64(kd).view(np.int64)
-    kd = kd - _SHIFTER
-    r = fma(kd, _GEXP_NEG_LN2_LO_N, fma(kd, _GEXP_NEG_LN2_HI_N, x))
-    idx = 2 * (ki & 127)
-    tail = np.int64(_GEXP_TABLE[idx]).view(np.float64)
-    sbits = _GEXP_TABLE[idx + 1] + (ki << 45)
-    r2 = r * r
-    tmp = fma(r2 * r2, fma(r, _GEXP_C5, _GEXP_C4), fma(r2, fma(r, _GEXP_C3, _GEXP_C2), tail + r))
+    ki, sbits, tmp, down, y_down = _glibc_exp_parts(x)
     scale = np.int64(sbits).view(np.float64)
     y = fma(scale, tmp, scale)
     # |x| in [512, 1024): glibc's specialcase(), both signs of k
     up = np.int64(sbits - (1009 << 52)).view(np.float64)
     y_up = _TWO_1009 * fma(up, tmp, up)
-    down = np.int64(sbits + (1022 << 52)).view(np.float64)
-    y_down = down + down * tmp
     lo = (down - y_down) + down * tmp
     hi = 1.0 + y_down
     lo = ((1.0 - hi) + y_down) + lo

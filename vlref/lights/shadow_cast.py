@@ -179,7 +179,7 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     n = packed.count
     ints = np.zeros((n, NSI), dtype=np.int64)
     floats = np.zeros((n, NSF))
-    chunks, tints, names = [], [], []
+    casts, names = [], []  # (face, orthographic, resolution, shadow settings) and the maps' names, in data order
     offset = 0
     for i, light in enumerate(scene.lights):
         sh = light.shadows
@@ -216,13 +216,13 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
                                True))
         ints[i, S_RES], ints[i, S_OFFSET] = res, offset
         for name, face, ortho in faces:
-            out = np.empty(res * res, dtype=np.float32)
-            tint = np.empty((res * res if want_tint else 0, 4), dtype=np.float32)
-            _cast_face(geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, out, tint)
-            chunks.append(out)
-            tints.append(tint)
+            casts.append((face, ortho, res, sh))
             names.append((name, i, offset, res * res))
             offset += res * res
-    data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
-    tint = np.concatenate(tints) if tints else np.zeros((0, 4), dtype=np.float32)
+    # every face cast into its slice of the one table (a table of the faces' own arrays joined was a copy of it)
+    data = np.empty(offset, dtype=np.float32)
+    tint = np.empty((offset if want_tint else 0, 4), dtype=np.float32)
+    for (face, ortho, res, sh), (_, _, start, size) in zip(casts, names):
+        _cast_face(geo, face, ortho, res, sh.bias, sh.slope_bias, want_tint, data[start:start + size],
+                   tint[start:start + size] if want_tint else tint)
     return ShadowMaps(ints, floats, data, tint, names)
