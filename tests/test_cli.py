@@ -135,6 +135,12 @@ def test_reference_refuses_an_empty_shadow_grid(tmp_path, capsys):
     assert not (tmp_path / "ref").exists()
 
 
+def test_reference_refuses_an_unknown_kronrod_rule(tmp_path, capsys):
+    assert main(["reference", "pillars", "-o", str(tmp_path / "ref"), "--rule", "5"]) == 2
+    assert "--rule: invalid choice: 5" in capsys.readouterr().err
+    assert not (tmp_path / "ref").exists()
+
+
 def test_bias_reports_error_against_steps(tmp_path, capsys):
     out = tmp_path / "bias"
     assert main(["bias", "pillars", "--technique", "physical", "--steps", "4,16", "-o", str(out),
