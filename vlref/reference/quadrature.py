@@ -51,6 +51,7 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from ..geometry import traversal_stack
 from ..render import prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG3, WGK, WGK7, XGK, XGK7
@@ -281,8 +282,8 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     for _ in prange(WORKERS):
         o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
                                                     (out, trans, err, used, ok, shadow_edges)))
-        # assembled in the loop's body: Numba's parfor cannot pass nested tuples in
-        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded)
+        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in), with this thread's traversal stack
+        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, traversal_stack())
         _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits, rule, res)
     return out, trans, err, used, ok, shadow_edges
 
@@ -345,7 +346,8 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), sized by their shadow rays; pixels are
     # independent
     work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID) * max(1, len(scene.lights))
-    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx, float(rel_tol), float(abs_tol),
+    # ctx without its stack: each thread makes its own
+    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx[:-1], float(rel_tol), float(abs_tol),
                                int(shadow_samples), int(max_intervals), max_splits, int(rule))
              for y0, y1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
     inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
