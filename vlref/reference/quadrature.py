@@ -11,6 +11,7 @@ Method
 1. **Split points.** ``[0, t1]`` is cut at every known discontinuity of ``f`` or of its
    derivatives: the entry/exit of each light volume (range sphere, spot cone), the medium box, the
    closest approach ``tc`` of each point/spot light (the ``1/r²`` peak), and **shadow boundaries**.
+   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``).
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
    spaced points of the light's active interval; wherever two neighbours differ the change is
@@ -52,6 +53,7 @@ import numpy as np
 from numba import njit, prange
 
 from ..geometry import traversal_stack
+from ..medium import clip_to_bounds
 from ..render import prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG3, WGK, WGK7, XGK, XGK7
@@ -232,7 +234,15 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     edges[m] = t1
     m += 1
     edges[:m] = np.sort(edges[:m])
-    total, err, used, ok = adaptive(edges, m, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
+    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated. The box's entry and
+    # exit are edges (split_points), so the pieces kept are the same pieces.
+    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
+    k = 0
+    for i in range(m):
+        if inside <= edges[i] <= outside:
+            edges[k] = edges[i]
+            k += 1
+    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
     return total, err + boundary_err, used, ok, n - n_geom
 
 
