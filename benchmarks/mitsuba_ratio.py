@@ -223,17 +223,21 @@ def child(which: str, scene: Scene, setting: tuple[float, int, int], spp: int) -
     return {"setup_s": setup - start, "first_s": first - setup, "warm_s": time.perf_counter() - first}
 
 
-def first_calls(args, setting: tuple[float, int, int], spp: int) -> dict:
-    """Each renderer in a child process (:func:`child`): its report and the child's wall time."""
+def first_calls(args, setting: str, spp: int) -> dict:
+    """Each renderer in a child process (:func:`child`): its report and the child's wall time (or the end of its
+    error output, where it failed)."""
     out = {}
     for which in ("vlref", "mitsuba"):
         cmd = [sys.executable, __file__, "--child", which, "--width", str(args.width), "--height", str(args.height),
-               "--vlref", "/".join(map(str, setting)), "--spp", str(spp)]
+               "--vlref", setting, "--spp", str(spp)]
         start = time.perf_counter()
-        run = subprocess.run(cmd, capture_output=True, text=True, check=True)
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        if run.returncode != 0:
+            out[which] = {"error": run.stderr[-2000:]}
+            continue
         out[which] = {**json.loads(run.stdout.splitlines()[-1]), "process_s": time.perf_counter() - start}
         print(f"(progress) first call {which}: {out[which]}", file=sys.stderr, flush=True)
-    return out
+    return {"setting": setting, "spp": spp, **out}
 
 
 def main() -> None:
@@ -248,9 +252,9 @@ def main() -> None:
     ap.add_argument("--mitsuba-budget", type=float, default=120.0,
                     help="skip a Mitsuba run whose projected time passes this many seconds")
     ap.add_argument("--one-thread", action="store_true", help="also time one run of each setting on one thread")
-    ap.add_argument("--first-call", action="store_true",
-                    help="also time each renderer's first and second call in a fresh process (the first --vlref "
-                         "setting, Mitsuba at the first --spp)")
+    ap.add_argument("--first-call", metavar="SETTING", default=None,
+                    help="also time each renderer's first and second call in a fresh process: vlref at this setting "
+                         "(rel_tol/shadow_samples/rule), Mitsuba at the first --spp")
     ap.add_argument("--child", choices=("vlref", "mitsuba"), help=argparse.SUPPRESS)
     ap.add_argument("--out", default=None, help="write the report as JSON here")
     args = ap.parse_args()
@@ -278,8 +282,6 @@ def main() -> None:
         v["frame_runs_s"] += again["frame_runs_s"]
         v["seconds"] = float(np.median(v["runs_s"]))
         v["frame_seconds"] = float(np.median(v["frame_runs_s"]))
-    if args.first_call:
-        report["first_call"] = first_calls(args, settings[0], spp_list[0])
     report["same_error"] = at_same_error(report["mitsuba"], report["vlref"])
     floor = {"median": float(np.median(converged.error)), "p99": float(np.percentile(converged.error, 99))}
     report["converged"]["error_bound"] = floor
@@ -320,12 +322,22 @@ def main() -> None:
           f"Mitsuba {e['mitsuba_spp']:.3g} spp, {e['mitsuba_seconds']:.4g} s ({how}; fitted slopes median "
           f"{e['slopes']['median']:.2f}, p99 {e['slopes']['p99']:.2f}): {e['ratio']:.4g}x (median alone "
           f"{e['ratio_per_statistic']['median']:.3g}x, p99 alone {e['ratio_per_statistic']['p99']:.3g}x)")
-    for which, f in report.get("first_call", {}).items():
-        print(f"fresh process, {which}: set-up {f['setup_s']:.3f} s, first call {f['first_s']:.3f} s, second call "
-              f"{f['warm_s']:.3f} s, the whole process {f['process_s']:.2f} s")
     if args.out:
         with open(args.out, "w") as fh:
             json.dump(report, fh, indent=1)
+    if args.first_call:  # last: the measurements above are printed and written whatever happens here
+        report["first_call"] = first_calls(args, args.first_call, spp_list[0])
+        for which in ("vlref", "mitsuba"):
+            f = report["first_call"][which]
+            if "error" in f:
+                print(f"fresh process, {which}: failed: {f['error']}")
+                continue
+            print(f"fresh process, {which} ({args.first_call if which == 'vlref' else spp_list[0]}): set-up "
+                  f"{f['setup_s']:.3f} s, first call {f['first_s']:.3f} s, second call {f['warm_s']:.3f} s, the whole "
+                  f"process {f['process_s']:.2f} s")
+        if args.out:
+            with open(args.out, "w") as fh:
+                json.dump(report, fh, indent=1)
 
 
 if __name__ == "__main__":
