@@ -12,6 +12,7 @@ from vlref.camera import camera_from_settings
 from vlref.reference.closed_forms import closest_approach, directional_homogeneous, point_light_extinction
 from vlref.reference.integrand import WG, WG3, WGK, WGK7, XGK, XGK7
 from vlref.reference.quadrature import render_reference
+from vlref.reference.tiles import render_reference_tiled
 from vlref.scene.model import (Bounds, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings,
                                Sphere)
 
@@ -101,6 +102,16 @@ def test_the_coarse_rule_spends_fewer_evaluations_at_a_coarse_tolerance():
     fine, coarse = (render_reference(scene, rel_tol=1e-1, rule=rule) for rule in (15, 7))
     assert coarse.stats["intervals"] * 7 < 0.75 * fine.stats["intervals"] * 15
     assert coarse.stats["rule"] == 7 and fine.stats["rule"] == 15
+
+
+def test_tiles_solve_with_the_rule_asked_for():
+    light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
+    scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
+    whole = render_reference(scene, rel_tol=1e-1, rule=7)
+    tiled = render_reference_tiled(scene, 1e-1, rows_per_tile=4, quiet=True, rule=7)
+    assert tiled.stats["rule"] == 7 and tiled.stats["intervals"] == whole.stats["intervals"]
+    np.testing.assert_array_equal(tiled.inscatter, whole.inscatter)
+    assert not np.array_equal(whole.inscatter, render_reference(scene, rel_tol=1e-1).inscatter)
 
 
 def test_directional_light_in_a_bounded_box_matches_closed_form():

@@ -331,7 +331,8 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
     ``progress``: optional callable receiving stage names; ``shadow_samples`` (>= 1): visibility grid
     size per light and pixel (step 2 of the module docstring: runs longer than the light's interval along the
-    ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``: adaptive budget per pixel; ``rows``: only the image
+    ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``:
+    adaptive budget per pixel; ``rows``: only the image
     rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
     image bit for bit; :mod:`vlref.reference.tiles`); ``rule``: the Gauss–Kronrod rule, 15 (G7–K15) or 7 (G3–K7,
     half the integrand evaluations of an interval: for coarse ``rel_tol``, where most pixels converge at the first
