@@ -8,11 +8,13 @@ Mitsuba's ``volpath`` integrator (``max_depth = 2``: exactly single scattering, 
 called on those rays through its Python API, so no film filter or camera convention differs.
 
 1. The converged answer: :func:`~vlref.reference.render_reference` at ``rel_tol = 1e-9``.
-2. ``vlref reference`` at each setting ``rel_tol/shadow_samples`` of ``--vlref`` (the default 1e-4/512 and
-   coarser ones; ``shadow_samples`` is the shadow-boundary grid, ``vlref reference --shadow-samples``): its wall
-   time (median of the timed runs after a warm-up: ``--repeats`` before Mitsuba's runs and as many after, so load
-   drifts hit both renderers) and its per-pixel error against the converged answer (max over RGB): median and 99th
-   percentile.
+2. ``vlref reference`` at each setting ``rel_tol/shadow_samples[/rule]`` of ``--vlref`` (the default 1e-4/512/15
+   and coarser ones; ``shadow_samples`` is the shadow-boundary grid, ``vlref reference --shadow-samples``; ``rule``
+   the Gauss–Kronrod rule, ``--rule``, 15 when left out): its wall time (median of the timed runs after a warm-up:
+   ``--repeats`` before Mitsuba's runs and as many after, so load drifts hit both renderers), the part of it spent
+   before the quadrature (``stats["frame_seconds"]``: the frame, camera rays, G-buffer), with ``--one-thread`` one
+   run on one Numba thread (the parallel efficiency), and its per-pixel error against the converged answer (max over
+   RGB): median and 99th percentile.
 3. Mitsuba (``llvm_ad_rgb``, every core Dr.Jit finds) at increasing samples per pixel: wall time (after a warm-up
    pass that compiles its kernels) and the same error statistics. The next spp is skipped once its projected time
    (linear in spp) passes ``--mitsuba-budget`` seconds.
@@ -27,6 +29,11 @@ called on those rays through its Python API, so no film filter or camera convent
    float32, whose round-off (~1e-7 relative) floors the error it can reach at any spp: far below Mitsuba's
    measured errors the extrapolation is a formal figure.
 
+6. With ``--first-call``: what a user sees in a fresh process, each renderer in its own child process (this script
+   with ``--child``): the first call (vlref: its kernels loaded from Numba's cache; Mitsuba: the variant loaded, the
+   scene built and the first launch traced and compiled, or taken from Dr.Jit's kernel cache), then the same call
+   again (warm), and the child's whole wall time (interpreter, imports, both calls).
+
 Run from the repository root (``pip install mitsuba``):
 
     python benchmarks/mitsuba_ratio.py [--width 80 --height 45 --spp 256,1024,4096,16384 --out FILE.json]
@@ -38,6 +45,7 @@ import argparse
 import json
 import os
 import platform
+import subprocess
 import sys
 import time
 
@@ -72,27 +80,47 @@ def errors(image: np.ndarray, converged: np.ndarray) -> dict:
     return {"median": med, "p99": p99, "median_rel_peak": med / peak, "p99_rel_peak": p99 / peak}
 
 
-def parse_settings(text: str) -> list[tuple[float, int]]:
-    """``"1e-4/512,1e-1/4"`` -> ``[(1e-4, 512), (0.1, 4)]`` (rel_tol / shadow_samples)."""
+def parse_settings(text: str) -> list[tuple[float, int, int]]:
+    """``"1e-4/512,1e-1/1/7"`` -> ``[(1e-4, 512, 15), (0.1, 1, 7)]`` (rel_tol / shadow_samples / rule, 15 when left
+    out)."""
     out = []
     for item in text.split(","):
-        rel_tol, samples = item.split("/")
-        out.append((float(rel_tol), int(samples)))
+        rel_tol, samples, *rule = item.split("/")
+        out.append((float(rel_tol), int(samples), int(rule[0]) if rule else 15))
     return out
 
 
-def run_vlref(scene: Scene, setting: tuple[float, int], converged: np.ndarray, repeats: int) -> dict:
-    """``repeats`` timed runs of one setting (after a warm-up run) and the result's error."""
-    rel_tol, samples = setting
-    render_reference(scene, rel_tol=rel_tol, shadow_samples=samples)  # compiles (first call) / warms
-    seconds = []
+def reference(scene: Scene, setting: tuple[float, int, int]):
+    rel_tol, samples, rule = setting
+    return render_reference(scene, rel_tol=rel_tol, shadow_samples=samples, rule=rule)
+
+
+def run_vlref(scene: Scene, setting: tuple[float, int, int], converged: np.ndarray, repeats: int,
+              one_thread: bool = False) -> dict:
+    """``repeats`` timed runs of one setting (after a warm-up run), their time before the quadrature, the result's
+    error, and with ``one_thread`` the time of one run on one Numba thread."""
+    reference(scene, setting)  # compiles (first call) / warms
+    seconds, frame = [], []
     for _ in range(repeats):
         start = time.perf_counter()
-        result = render_reference(scene, rel_tol=rel_tol, shadow_samples=samples)
+        result = reference(scene, setting)
         seconds.append(time.perf_counter() - start)
-    out = {"rel_tol": rel_tol, "shadow_samples": samples, "runs_s": seconds, **errors(result.inscatter, converged)}
-    print(f"(progress) vlref {rel_tol:g}/{samples}: runs {seconds}, p99 {out['p99']:.3g}", file=sys.stderr, flush=True)
+        frame.append(result.stats["frame_seconds"])
+    out = {"rel_tol": setting[0], "shadow_samples": setting[1], "rule": setting[2], "runs_s": seconds,
+           "frame_runs_s": frame, **errors(result.inscatter, converged)}
+    if one_thread:
+        threads = numba.get_num_threads()
+        numba.set_num_threads(1)
+        start = time.perf_counter()
+        reference(scene, setting)
+        out["one_thread_s"] = time.perf_counter() - start
+        numba.set_num_threads(threads)
+    print(f"(progress) vlref {label(out)}: runs {seconds}, p99 {out['p99']:.3g}", file=sys.stderr, flush=True)
     return out
+
+
+def label(v: dict) -> str:
+    return f"{v['rel_tol']:g}/{v['shadow_samples']}/{v['rule']}"
 
 
 class MitsubaRays:
@@ -155,8 +183,8 @@ def at_same_error(mitsuba: list[dict], vlref: list[dict]) -> list[dict]:
         fits = [v for v in vlref if v["median"] <= m["median"] and v["p99"] <= m["p99"]]
         best = min(fits, key=lambda v: v["seconds"]) if fits else None
         out.append({"spp": m["spp"], "mitsuba_seconds": m["seconds"], "mitsuba_error": [m["median"], m["p99"]],
-                    "vlref": None if best is None else {k: best[k] for k in ("rel_tol", "shadow_samples", "seconds",
-                                                                                "median", "p99")},
+                    "vlref": None if best is None else {k: best[k] for k in ("rel_tol", "shadow_samples", "rule",
+                                                                                "seconds", "median", "p99")},
                     "ratio": None if best is None else m["seconds"] / best["seconds"]})
     return out
 
@@ -179,6 +207,39 @@ def needed(mitsuba: list[dict], target: dict) -> dict:
             "spp_per_statistic": per_stat}
 
 
+def child(which: str, scene: Scene, setting: tuple[float, int, int], spp: int) -> dict:
+    """One renderer's first and second call in this (fresh) process (step 6 of the module docstring)."""
+    start = time.perf_counter()
+    if which == "vlref":
+        reference(scene, setting)
+        first = time.perf_counter()
+        reference(scene, setting)
+        return {"setup_s": 0.0, "first_s": first - start, "warm_s": time.perf_counter() - first}
+    rays = MitsubaRays(scene)
+    setup = time.perf_counter()
+    rays.radiance(spp, seed=1)
+    first = time.perf_counter()
+    rays.radiance(spp, seed=2)
+    return {"setup_s": setup - start, "first_s": first - setup, "warm_s": time.perf_counter() - first}
+
+
+def first_calls(args, setting: str, spp: int) -> dict:
+    """Each renderer in a child process (:func:`child`): its report and the child's wall time (or the end of its
+    error output, where it failed)."""
+    out = {}
+    for which in ("vlref", "mitsuba"):
+        cmd = [sys.executable, __file__, "--child", which, "--width", str(args.width), "--height", str(args.height),
+               "--vlref", setting, "--spp", str(spp)]
+        start = time.perf_counter()
+        run = subprocess.run(cmd, capture_output=True, text=True)
+        if run.returncode != 0:
+            out[which] = {"error": run.stderr[-2000:]}
+            continue
+        out[which] = {**json.loads(run.stdout.splitlines()[-1]), "process_s": time.perf_counter() - start}
+        print(f"(progress) first call {which}: {out[which]}", file=sys.stderr, flush=True)
+    return {"setting": setting, "spp": spp, **out}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--width", type=int, default=80)
@@ -190,9 +251,19 @@ def main() -> None:
     ap.add_argument("--spp", default="256,1024,4096,16384", help="Mitsuba samples per pixel (comma-separated)")
     ap.add_argument("--mitsuba-budget", type=float, default=120.0,
                     help="skip a Mitsuba run whose projected time passes this many seconds")
+    ap.add_argument("--one-thread", action="store_true", help="also time one run of each setting on one thread")
+    ap.add_argument("--first-call", metavar="SETTING", default=None,
+                    help="also time each renderer's first and second call in a fresh process: vlref at this setting "
+                         "(rel_tol/shadow_samples/rule), Mitsuba at the first --spp")
+    ap.add_argument("--child", choices=("vlref", "mitsuba"), help=argparse.SUPPRESS)
     ap.add_argument("--out", default=None, help="write the report as JSON here")
     args = ap.parse_args()
     scene = bench_scene(args.width, args.height)
+    settings = parse_settings(args.vlref)
+    spp_list = [int(s) for s in args.spp.split(",")]
+    if args.child:
+        print(json.dumps(child(args.child, scene, settings[0], spp_list[0])))
+        return
     start = time.perf_counter()
     converged = render_reference(scene, rel_tol=1e-9, max_intervals=20000)
     report = {"machine": {"cpu": platform.processor() or platform.machine(), "cores": os.cpu_count(),
@@ -201,15 +272,16 @@ def main() -> None:
               "converged": {"rel_tol": 1e-9, "seconds": time.perf_counter() - start,
                             "unconverged_pixels": int(converged.stats.get("unconverged", 0)),
                             "max_error_bound_rel_peak": float(converged.max_error / converged.inscatter.max())}}
-    settings = parse_settings(args.vlref)
-    report["vlref"] = [run_vlref(scene, s, converged.inscatter, args.repeats) for s in settings]
+    report["vlref"] = [run_vlref(scene, s, converged.inscatter, args.repeats, args.one_thread) for s in settings]
     rays = MitsubaRays(scene)
     report["machine"]["drjit_threads"] = rays.dr.thread_count()
-    report["mitsuba"] = time_mitsuba(rays, [int(s) for s in args.spp.split(",")], converged.inscatter,
-                                     args.mitsuba_budget)
+    report["mitsuba"] = time_mitsuba(rays, spp_list, converged.inscatter, args.mitsuba_budget)
     for v, s in zip(report["vlref"], settings):  # the same runs after Mitsuba's: load drifts hit both renderers
-        v["runs_s"] += run_vlref(scene, s, converged.inscatter, args.repeats)["runs_s"]
+        again = run_vlref(scene, s, converged.inscatter, args.repeats)
+        v["runs_s"] += again["runs_s"]
+        v["frame_runs_s"] += again["frame_runs_s"]
         v["seconds"] = float(np.median(v["runs_s"]))
+        v["frame_seconds"] = float(np.median(v["frame_runs_s"]))
     report["same_error"] = at_same_error(report["mitsuba"], report["vlref"])
     floor = {"median": float(np.median(converged.error)), "p99": float(np.percentile(converged.error, 99))}
     report["converged"]["error_bound"] = floor
@@ -218,6 +290,7 @@ def main() -> None:
     need = needed(report["mitsuba"], target)
     last = report["mitsuba"][-1]
     report["extrapolated"] = {"rel_tol": default["rel_tol"], "shadow_samples": default["shadow_samples"],
+                              "rule": default["rule"],
                               "target": target, "mitsuba_spp": need["spp"], "mitsuba_seconds": need["seconds"],
                               "measured": need["measured"], "slopes": need["slopes"],
                               "ratio": need["seconds"] / default["seconds"],
@@ -226,8 +299,10 @@ def main() -> None:
                                                       for s, n in need["spp_per_statistic"].items()}}
     print(f"machine: {report['machine']}; {args.width}x{args.height}; converged answer {report['converged']}")
     for v in report["vlref"]:
-        print(f"vlref reference rel_tol {v['rel_tol']:g} shadow_samples {v['shadow_samples']}: {v['seconds']:.4f} s "
-              f"(runs {', '.join(f'{t:.4f}' for t in v['runs_s'])}), error median {v['median']:.3g} p99 "
+        one = f", one thread {v['one_thread_s']:.4f} s" if "one_thread_s" in v else ""
+        print(f"vlref reference {label(v)} (rel_tol/shadow_samples/rule): {v['seconds']:.4f} s "
+              f"(runs {', '.join(f'{t:.4f}' for t in v['runs_s'])}; before the quadrature {v['frame_seconds']:.4f} s"
+              f"{one}), error median {v['median']:.3g} p99 "
               f"{v['p99']:.3g} ({v['median_rel_peak']:.2g} / {v['p99_rel_peak']:.2g} of the peak)")
     for m in report["mitsuba"]:
         print(f"mitsuba {m['spp']:6d} spp: {m['seconds']:.3f} s, error median {m['median']:.3g} p99 {m['p99']:.3g} "
@@ -238,8 +313,8 @@ def main() -> None:
             print(f"mitsuba {r['spp']} spp: no vlref setting reaches its error")
             continue
         print(f"same error as Mitsuba {r['spp']} spp ({r['mitsuba_seconds']:.3f} s, median {r['mitsuba_error'][0]:.3g}"
-              f" p99 {r['mitsuba_error'][1]:.3g}): vlref rel_tol {v['rel_tol']:g} shadow_samples "
-              f"{v['shadow_samples']}, {v['seconds']:.4f} s, median {v['median']:.3g} p99 {v['p99']:.3g}: "
+              f" p99 {r['mitsuba_error'][1]:.3g}): vlref {label(v)}, {v['seconds']:.4f} s, median "
+              f"{v['median']:.3g} p99 {v['p99']:.3g}: "
               f"**{r['ratio']:.4g}x** (measured)")
     e = report["extrapolated"]
     how = "measured" if e["measured"] else "extrapolated by spp^-1/2"
@@ -250,6 +325,19 @@ def main() -> None:
     if args.out:
         with open(args.out, "w") as fh:
             json.dump(report, fh, indent=1)
+    if args.first_call:  # last: the measurements above are printed and written whatever happens here
+        report["first_call"] = first_calls(args, args.first_call, spp_list[0])
+        for which in ("vlref", "mitsuba"):
+            f = report["first_call"][which]
+            if "error" in f:
+                print(f"fresh process, {which}: failed: {f['error']}")
+                continue
+            print(f"fresh process, {which} ({args.first_call if which == 'vlref' else spp_list[0]}): set-up "
+                  f"{f['setup_s']:.3f} s, first call {f['first_s']:.3f} s, second call {f['warm_s']:.3f} s, the whole "
+                  f"process {f['process_s']:.2f} s")
+        if args.out:
+            with open(args.out, "w") as fh:
+                json.dump(report, fh, indent=1)
 
 
 if __name__ == "__main__":

@@ -5,8 +5,9 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vlref.camera import (Camera, euler_matrix, linear_to_raw, look_rotation, raw_to_linear, unity_linear_eye_depth,
-                          zbuffer_params)
+from vlref.camera import (Camera, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
+                          unity_linear_eye_depth, zbuffer_params)
+from vlref.row_blocks import MAX_BLOCK_ROWS
 
 near_far = st.tuples(st.floats(0.01, 10.0), st.floats(1.5, 1e4)).map(lambda nf: (nf[0], nf[0] * nf[1]))
 
@@ -71,6 +72,31 @@ def test_rays_are_computed_once_per_size_and_handed_out_as_copies():
     assert shared is cam.ray_directions(copy=False) and np.array_equal(shared, fresh)
     copy = pickle.loads(pickle.dumps(cam))  # the stored rays do not travel (Dask workers get small cameras)
     assert copy._rays == {} and np.array_equal(copy.ray_directions(), fresh)
+
+
+def whole_frame_rays(cam, width, height):
+    """The rays as one NumPy expression over the whole frame (what the camera computed before its blocks)."""
+    nx, ny = cam.pixel_ndc(width, height)
+    t = cam.tan_half_fov
+    d = np.stack([nx * t * cam.aspect, ny * t, np.ones_like(nx)], axis=-1) @ cam.rotation.T
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def test_rays_in_blocks_on_threads_have_the_bits_of_the_whole_frame_expression():
+    # matmul calls BLAS once per row and the rest is per pixel: any block split or thread count, the same bits
+    rng = np.random.default_rng(7)
+    heights = (1, 2, 17, MAX_BLOCK_ROWS, MAX_BLOCK_ROWS + 1, 2 * MAX_BLOCK_ROWS + 45)
+    for k, h in enumerate(heights):
+        rot = euler_matrix(rng.uniform(-180.0, 180.0, 3)) if k % 2 else look_rotation(rng.normal(size=3))
+        w = int(rng.integers(1, 300))
+        cam = Camera(rng.normal(size=3), rot, float(rng.uniform(5.0, 150.0)), w, h, 0.1, 100.0)
+        for size in ((w, h), (max(1, w // 2), max(1, h // 3))):
+            expected = whole_frame_rays(cam, *size).tobytes()
+            for threads in (1, 2, 5, 16):
+                assert pixel_rays(cam, *size, threads).tobytes() == expected, (w, h, size, threads)
+            assert cam.ray_directions(*size).tobytes() == expected
+    cam = make_camera(w=1920, h=1080, rot=(4.0, -30.0, 0.0))
+    assert cam.ray_directions(copy=False).tobytes() == whole_frame_rays(cam, 1920, 1080).tobytes()
 
 
 def test_eye_depth_to_distance_round_trip():

@@ -14,6 +14,8 @@ from vlref.io.exr import read_exr
 from vlref.io.images import read_image
 from vlref.io.png import png_text
 from vlref.io.tonemap import srgb8
+from vlref.reference import render_reference
+from vlref.scene.load import load_scene
 
 SMALL = ["--set", "render.width=48", "--set", "render.height=27", "--set", "render.steps=8"]
 
@@ -132,6 +134,25 @@ def test_reference_writes_reference_and_error_and_reports_the_largest_estimate(t
 def test_reference_refuses_an_empty_shadow_grid(tmp_path, capsys):
     assert main(["reference", "pillars", "-o", str(tmp_path / "ref"), "--shadow-samples", "0"]) == 2
     assert "--shadow-samples: must be at least 1, not 0" in capsys.readouterr().err
+    assert not (tmp_path / "ref").exists()
+
+
+def test_reference_solves_with_the_rule_asked_for_and_records_it(tmp_path):
+    out = tmp_path / "ref"
+    assert main(["reference", "pillars", "-o", str(out), "--set", "render.width=12", "--set", "render.height=8",
+                 "--rel-tol", "1e-1", "--shadow-samples", "8", "--rule", "7"]) == 0
+    _, meta = read_exr(out / "inscatter.exr")
+    assert meta["rule"] == "7" and meta["shadow_samples"] == "8"
+    scene = load_scene("pillars", ["render.width=12", "render.height=8"])
+    written = read_image(out / "inscatter.exr")
+    coarse, fine = (render_reference(scene, rel_tol=1e-1, shadow_samples=8, rule=rule).inscatter for rule in (7, 15))
+    assert np.array_equal(written, coarse.astype(written.dtype))
+    assert not np.array_equal(written, fine.astype(written.dtype))
+
+
+def test_reference_refuses_an_unknown_kronrod_rule(tmp_path, capsys):
+    assert main(["reference", "pillars", "-o", str(tmp_path / "ref"), "--rule", "5"]) == 2
+    assert "--rule: invalid choice: 5" in capsys.readouterr().err
     assert not (tmp_path / "ref").exists()
 
 

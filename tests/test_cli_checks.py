@@ -232,6 +232,21 @@ def test_the_program_freezes_its_objects_out_of_the_collectors_sight_and_a_call_
     capsys.readouterr()
 
 
+def test_the_program_imports_its_command_with_the_collector_off_and_turns_it_back_on(monkeypatch):
+    import gc
+
+    from vlref.cli import commands
+
+    seen = []
+    monkeypatch.setattr(commands, "command", lambda name: seen.append((name, gc.isenabled())) or name)
+    assert gc.isenabled()
+    try:
+        assert commands.program_command("render") == "render"
+        assert seen == [("render", False)] and gc.isenabled() and gc.get_freeze_count() > 0
+    finally:
+        gc.unfreeze()
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene

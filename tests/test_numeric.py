@@ -1,6 +1,7 @@
 """vlref.numeric: ``exp`` and ``expm1`` written for vectorised lane loops, against libm (NumPy's ``exp`` /
 ``expm1``), and ``cast``."""
 
+import decimal
 import math
 import platform
 
@@ -9,7 +10,8 @@ import pytest
 from hypothesis import given, strategies as st
 from numba import njit
 
-from vlref.numeric import arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, is_float64, prefer_wide_vectors
+from vlref.numeric import (_GEXP_TABLE, arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, glibc_exp_normal,
+                           is_float64, prefer_wide_vectors)
 
 
 @njit(cache=True)
@@ -165,6 +167,27 @@ def _glibc_exps(xs, out):
         out[i] = glibc_exp(xs[i])
 
 
+@njit(cache=True)
+def _glibc_exps_normal(xs, out):
+    for i in range(xs.size):  # a lane loop, as the bilateral blur's
+        out[i] = glibc_exp_normal(xs[i])
+
+
+def test_glibc_exp_normal_has_glibc_exps_bits_on_its_range():
+    # [-708, 512): glibc's main path and, for x <= -512, its special case's rescaled sum; the edges of both, the
+    # arguments that glibc sends to 1 + x, and where the rescaled sum is closest to 2^-1022
+    rng = np.random.default_rng(20)
+    tiny = rng.uniform(-(2.0**-54), 2.0**-54, 1000)
+    edges = [-708.0, np.nextafter(-708.0, 0.0), -512.0, np.nextafter(-512.0, 0.0), np.nextafter(-512.0, -1.0),
+             np.nextafter(512.0, 0.0), 0.0, -0.0, 2.0**-54, -(2.0**-54), 5e-324, -5e-324]
+    xs = np.concatenate([rng.uniform(-708.0, 512.0, 200_000), rng.uniform(-708.0, -500.0, 100_000), tiny, edges])
+    got, ref = np.empty_like(xs), np.empty_like(xs)
+    _glibc_exps_normal(xs, got)
+    _glibc_exps(xs, ref)
+    assert xs[got.view(np.int64) != ref.view(np.int64)].size == 0
+    assert np.all(got[xs <= -512.0] >= 2.0**-1022)
+
+
 def _libm_exp(x: float) -> float:
     try:
         return math.exp(x)
@@ -219,3 +242,18 @@ def test_glibc_exp_any_argument(x):
     got, ref = glibc_exp(x), _libm_exp(x)
     assert got == ref or (math.isnan(got) and math.isnan(ref))
     assert math.isnan(ref) or math.copysign(1.0, got) == math.copysign(1.0, ref)  # a NaN's sign: not kept by LLVM
+
+
+def test_the_exp_table_by_square_roots_equals_the_table_by_powers():
+    """vlref.numeric's table of ``2^(k/128)`` (seven 60-digit square roots of ``2^k``) against 60-digit powers
+    ``2^(k/128)``, the definition's other route: the same 256 integers."""
+    expected = np.empty(256, np.int64)
+    with decimal.localcontext() as context:
+        context.prec = 60
+        for k in range(128):
+            power = decimal.Decimal(2) ** (decimal.Decimal(k) / 128)
+            head = float(power)
+            expected[2 * k] = np.float64(float((power - decimal.Decimal(head)) / decimal.Decimal(head))).view(np.int64)
+            expected[2 * k + 1] = np.float64(head).view(np.int64) - (k << 45)
+    assert np.array_equal(_GEXP_TABLE, expected)
+    assert _GEXP_TABLE[1] == np.float64(1.0).view(np.int64) and _GEXP_TABLE[0] == 0  # k = 0: 2^0 = 1 exactly

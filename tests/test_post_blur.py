@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 
 from post_cases import depth_image, image, raw_depth, sizes
-from vlref.post.blur import (URP_GAUSS_WEIGHTS, _bilateral_lines, _weight_code, bilateral_pass, blur_hv,
+from vlref.post.blur import (URP_GAUSS_WEIGHTS, _bilateral_lines, _gaussian_weight, _gaussian_weights, _weight_code, bilateral_pass, blur_hv,
                              gaussian_weights, thesis_blur_pass, urp_article_blur_pass, urp_repo_blur_pass, vl_blur_pass)
 
 RTOL = 1e-12   # numpy's exp and math.exp may differ by an ulp; everything else is the same arithmetic
@@ -107,6 +107,31 @@ def test_bilateral_pass_independent_of_the_blocks():
         _bilateral_lines(v, z, 0, g, _weight_code("gaussian", 1.0, 1.0), 1.0, 1.0, blocks, out)
         runs.append(out)
     assert all(np.array_equal(runs[0], r) for r in runs[1:])
+
+
+@pytest.mark.parametrize("n", [0, 1, 7, 8, 9, 63, 64, 1000])
+def test_gaussian_weights_same_bits_as_one_by_one(n):
+    # the vector loop takes glibc's main path for exp arguments in [-708, 0] and 0 below -746; the lanes between
+    # (subnormal weights) and NaN are redone one by one, skipping words of 8 unmarked lanes: every lane has
+    # _gaussian_weight's bits, whichever lanes of a word are marked, the last word short or not
+    rng = np.random.default_rng(n)
+    bands = np.array([[0.0, 22.0], [22.0, 26.6], [26.6, 27.3], [27.3, 40.0]])   # |dz f|: x above/below -512, ...
+    for factor in (1.0, -0.7, 3e-3):
+        lo, hi = bands[rng.integers(0, 4, n)].T
+        tap = rng.uniform(0.0, 50.0, n) / abs(factor)
+        at = tap + rng.uniform(lo, hi) / abs(factor) * rng.choice([-1.0, 1.0], n)
+        same = rng.random(n) < 0.1
+        at[same] = tap[same]                                  # equal depths (dz = 0), then sky against a depth
+        at[rng.random(n) < 0.05], tap[rng.random(n) < 0.05] = np.inf, np.nan
+        flags = np.full(n // 8 + 1, 2**64 - 1, np.uint64)   # a previous line's marks do not count
+        out = np.empty(n)
+        _gaussian_weights(tap, at, factor, flags, out)
+        ref = np.array([_gaussian_weight(ddelta(a, b), factor) for a, b in zip(tap, at)])
+        assert np.array_equal(np.isnan(out), np.isnan(tap)) and np.array_equal(np.isnan(ref), np.isnan(tap))
+        ok = ~np.isnan(tap)
+        assert np.array_equal(out[ok].view(np.int64), ref[ok].view(np.int64)), factor
+        if n >= 64:   # every kind of lane occurred
+            assert (out[ok] == 0).any() and (out[ok] == 1).any() and ((out[ok] > 0) & (out[ok] < 2.0**-1022)).any()
 
 
 def urp_reference(fog, zf, axis, taps_lo, taps_hi, centre_hi, n):

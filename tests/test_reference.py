@@ -10,7 +10,9 @@ from scipy import optimize
 
 from vlref.camera import camera_from_settings
 from vlref.reference.closed_forms import closest_approach, directional_homogeneous, point_light_extinction
+from vlref.reference.integrand import WG, WG3, WGK, WGK7, XGK, XGK7
 from vlref.reference.quadrature import render_reference
+from vlref.reference.tiles import render_reference_tiled
 from vlref.scene.model import (Bounds, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings,
                                Sphere)
 
@@ -60,14 +62,56 @@ def test_point_light_matches_airlight_integral(g):
     assert np.allclose(res.transmittance, math.exp(-0.15 * 30.0), rtol=1e-12)
 
 
-def test_tighter_tolerance_tightens_the_error():
+@pytest.mark.parametrize("nodes, xgk, wgk, wg, degree", [(15, XGK, WGK, WG, 23), (7, XGK7, WGK7, WG3, 11)])
+def test_the_kronrod_rules_integrate_polynomials_to_their_degree_exactly(nodes, xgk, wgk, wg, degree):
+    """Each rule's nodes and weights (K on all nodes; its embedded Gauss rule on the odd entries and the centre)
+    integrate ``x^d`` over [-1, 1] exactly: K up to ``degree``, Gauss up to ``2 n - 1`` for its ``n`` nodes (the
+    Gauss rule's accuracy against which the error is estimated), and neither beyond."""
+    x = np.concatenate([-xgk[:-1], xgk[::-1]])
+    wk = np.concatenate([wgk[:-1], wgk[::-1]])
+    gauss = np.arange(xgk.size)[1::2]
+    xg = np.concatenate([-xgk[gauss[:-1]], xgk[gauss[::-1]]])
+    wgs = np.concatenate([wg[:-1], wg[::-1]])
+    assert x.size == nodes and xg.size == (nodes - 1) // 2
+    exact = lambda d: 2.0 / (d + 1) if d % 2 == 0 else 0.0  # noqa: E731
+    for d in range(degree + 1):
+        assert abs(np.dot(wk, x ** d) - exact(d)) < 1e-15
+    for d in range(xg.size * 2):
+        assert abs(np.dot(wgs, xg ** d) - exact(d)) < 1e-15
+    assert abs(np.dot(wk, x ** (degree + 1)) - exact(degree + 1)) > 1e-12
+    assert abs(np.dot(wgs, xg ** (2 * xg.size)) - exact(2 * xg.size)) > 1e-12
+
+
+@pytest.mark.parametrize("rule", [15, 7])
+def test_tighter_tolerance_tightens_the_error(rule):
     light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
     scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
     exact = _point_exact(scene, light)
-    for tol in (1e-3, 1e-6, 1e-9):
-        res = render_reference(scene, rel_tol=tol, abs_tol=1e-14)
+    for tol in (1e-1, 1e-3, 1e-6, 1e-9):
+        res = render_reference(scene, rel_tol=tol, abs_tol=1e-14, rule=rule)
         true = _check_bound(res, exact, tol)
         assert np.all(true <= tol * exact)
+
+
+def test_the_coarse_rule_spends_fewer_evaluations_at_a_coarse_tolerance():
+    """G3–K7 evaluates the integrand 7 times per interval, G7–K15 15 times: at ``rel_tol = 1e-1`` most pixels
+    converge on the first pass with either, so the coarse rule needs fewer evaluations in all (and stays within its
+    bound of the closed form, as the test above checks)."""
+    light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
+    scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
+    fine, coarse = (render_reference(scene, rel_tol=1e-1, rule=rule) for rule in (15, 7))
+    assert coarse.stats["intervals"] * 7 < 0.75 * fine.stats["intervals"] * 15
+    assert coarse.stats["rule"] == 7 and fine.stats["rule"] == 15
+
+
+def test_tiles_solve_with_the_rule_asked_for():
+    light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
+    scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
+    whole = render_reference(scene, rel_tol=1e-1, rule=7)
+    tiled = render_reference_tiled(scene, 1e-1, rows_per_tile=4, quiet=True, rule=7)
+    assert tiled.stats["rule"] == 7 and tiled.stats["intervals"] == whole.stats["intervals"]
+    np.testing.assert_array_equal(tiled.inscatter, whole.inscatter)
+    assert not np.array_equal(whole.inscatter, render_reference(scene, rel_tol=1e-1).inscatter)
 
 
 def test_directional_light_in_a_bounded_box_matches_closed_form():
@@ -160,13 +204,14 @@ def _sphere_exact(scene, pixels):
     return exact
 
 
-def test_sphere_shadow_boundaries_are_located():
+@pytest.mark.parametrize("rule, rel_tol", [(15, 1e-4), (7, 1e-4), (7, 1e-2)])
+def test_sphere_shadow_boundaries_are_located(rule, rel_tol):
     scene, pixels = _sphere_case()
-    res = render_reference(scene)
+    res = render_reference(scene, rel_tol=rel_tol, rule=rule)
     assert sum(len(lit) > 1 for _, lit in pixels.values()) > 5, "the scene must cast volumetric shadows"
     exact = _sphere_exact(scene, pixels)
-    true = _check_bound(res, exact, 1e-4)
-    assert np.all(true <= 1e-4 * exact)
+    true = _check_bound(res, exact, rel_tol)
+    assert np.all(true <= rel_tol * exact)
 
 
 @pytest.mark.parametrize("samples", [6, 16])

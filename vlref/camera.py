@@ -25,10 +25,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .row_blocks import in_row_blocks
+
 DEPTH_CONVENTIONS = ("d3d", "gl", "reversed")
 
 __all__ = ["Camera", "euler_matrix", "look_rotation", "linear_to_raw", "raw_to_linear", "zbuffer_params",
-           "unity_linear_eye_depth", "DEPTH_CONVENTIONS", "camera_from_settings"]
+           "unity_linear_eye_depth", "DEPTH_CONVENTIONS", "camera_from_settings", "pixel_rays"]
 
 
 def euler_matrix(degrees) -> np.ndarray:
@@ -140,9 +142,9 @@ class Camera:
         ``copy=False``).
 
         ``width``/``height`` give the rays of a reduced-resolution target covering the same frustum. The
-        directions of each size are computed once per camera and copied out (at 1080p the computation takes
-        0.08-0.4 s of one core, the copy about 0.01 s: a frame re-rendered with other settings, as a
-        notebook's sliders do, would otherwise repeat it serially before every march). ``copy=False`` hands
+        directions of each size are computed once per camera (:func:`pixel_rays`, in row blocks on Numba's
+        thread count) and copied out (a frame re-rendered with other settings, as a notebook's sliders do,
+        would otherwise repeat the computation before every march). ``copy=False`` hands
         out the camera's own array, for a caller that only reads it (the physical march: the copy, 4-6 ms at
         1080p on the dev box, ran on one core before every march); writing to it changes every later call's
         rays.
@@ -150,11 +152,7 @@ class Camera:
         key = (self.width if width is None else width, self.height if height is None else height)
         rays = self._rays.get(key)
         if rays is None:
-            nx, ny = self.pixel_ndc(width, height)
-            t = self.tan_half_fov
-            v = np.stack([nx * t * self.aspect, ny * t, np.ones_like(nx)], axis=-1)
-            d = v @ self.rotation.T
-            rays = d / np.linalg.norm(d, axis=-1, keepdims=True)
+            rays = pixel_rays(self, *key)
             self._rays[key] = rays
         return rays.copy() if copy else rays
 
@@ -168,6 +166,29 @@ class Camera:
         """Distance along each pixel ray for a linear eye depth: ``t = z / dot(d, forward)``."""
         d = self.ray_directions() if directions is None else directions
         return depth / (d @ self.forward)
+
+
+def pixel_rays(camera: Camera, width: int, height: int, threads: int | None = None) -> np.ndarray:
+    """:meth:`Camera.ray_directions` of a ``width x height`` target, computed anew: (H, W, 3) float64.
+
+    Per pixel ``d = (nx tan·aspect, ny tan, 1) R^T``, ``d / |d|`` (NumPy's ``stack``, ``matmul`` and
+    ``linalg.norm``, as written here), on blocks of whole rows written into the result, the blocks spread over
+    ``threads`` threads (:func:`vlref.row_blocks.in_row_blocks`; default Numba's thread count). ``matmul`` of a
+    (rows, W, 3) stack calls BLAS once per row and the other operations are per pixel, so every block split and
+    thread count gives the bits of the whole frame computed at once (tests/test_camera.py); BLAS's kernel may
+    still differ between machines.
+    """
+    nx, ny = camera.pixel_ndc(width, height)
+    t, aspect, rotation_t = camera.tan_half_fov, camera.aspect, camera.rotation.T
+    rays = np.empty((height, width, 3))
+
+    def block(y0: int, y1: int) -> None:
+        x, y = nx[y0:y1], ny[y0:y1]
+        d = np.stack([x * t * aspect, y * t, np.ones_like(x)], axis=-1) @ rotation_t
+        np.divide(d, np.linalg.norm(d, axis=-1, keepdims=True), out=rays[y0:y1])
+
+    in_row_blocks(height, block, threads)
+    return rays
 
 
 def camera_from_settings(settings, width: int, height: int) -> Camera:

@@ -36,6 +36,7 @@ import numpy as np
 from . import __version__
 from .camera import Camera, camera_from_settings
 from .geometry import build_geometry, raycast
+from .jit_init import initialise_numba
 from .lights import pack_lights
 from .lights.shading import scene_colour
 from .lights.shadow_cast import build_shadow_maps
@@ -127,8 +128,11 @@ class RenderResult:
 
 def prepare_frame(scene: Scene, tick: Callable[[str], None] | None = None) -> Frame:
     """Camera, geometry, G-buffer, packed lights and scene colour of ``scene`` at its ``render.frame``
-    (:func:`vlref.scene.animation.scene_at`; ``Frame.scene`` is the evaluated scene)."""
+    (:func:`vlref.scene.animation.scene_at`; ``Frame.scene`` is the evaluated scene). Numba's one-time
+    initialisation, where this process has not made it yet, is part of its first stage
+    (:func:`vlref.jit_init.initialise_numba`)."""
     tick = tick or (lambda name: None)
+    initialise_numba()
     scene = scene_at(scene)
     camera = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
     geometry = build_geometry(scene)

@@ -82,9 +82,8 @@ def _child(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: 
 _WHOLE = """
 import gc, json, pickle, sys, tempfile, time
 t0 = time.perf_counter()
-from vlref.cli.commands import command
-render_to_folder = command("render").render_to_folder  # the modules `vlref render` imports, no more
-gc.freeze()  # as the vlref program does (vlref.cli.commands.main)
+from vlref.cli.commands import exit_at_once, program_command
+render_to_folder = program_command("render").render_to_folder  # what `vlref render` imports, as it imports it
 t1 = time.perf_counter()
 with open(sys.argv[1], "rb") as fh:
     scene = pickle.load(fh)
@@ -93,9 +92,10 @@ with tempfile.TemporaryDirectory() as folder:
 t2 = time.perf_counter()
 gc.freeze()
 print(json.dumps({"import_s": t1 - t0, "stages": result.timings, "write_s": write_s, "in_process_s": t2 - t0}))
+exit_at_once(0)  # as the vlref program ends a render (vlref.cli.commands.EXIT_AT_ONCE)
 """
 """The child of :func:`_whole`: it imports what ``vlref render`` imports (the scene comes pickled, so the
-benchmark's own modules stay out of the import time)."""
+benchmark's own modules stay out of the import time) and ends as ``vlref render`` ends."""
 
 
 def _whole(cache_dir: str | None, w: int, h: int, steps: int, lights: str, res: int) -> dict:

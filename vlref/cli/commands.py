@@ -11,9 +11,11 @@ cluster's code for failed items (:class:`vlref.work_items.ItemsFailed`), 130 / 1
 from __future__ import annotations
 
 import argparse
+import atexit
 import contextlib
 import gc
 import importlib
+import os
 import signal
 import sys
 import threading
@@ -22,7 +24,8 @@ from .. import __version__
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
-__all__ = ["COMMANDS", "command", "build_parser", "main", "Interrupted"]
+__all__ = ["COMMANDS", "EXIT_AT_ONCE", "command", "program_command", "build_parser", "main", "exit_at_once",
+           "Interrupted"]
 
 COMMANDS = {
     # name: (module of vlref.cli, prefix of its error messages)
@@ -41,10 +44,30 @@ COMMANDS = {
 }
 """Sub-commands; a two-word name (``march export``) is matched before its first word."""
 
+EXIT_AT_ONCE = frozenset({"render"})
+"""Commands whose program process ends through :func:`exit_at_once` once they have returned: they start no
+cluster, server or thread that outlives them (a command that may, such as those with ``--scheduler``, ends as
+the interpreter ends)."""
+
 
 def command(name: str):
     """The module of sub-command ``name`` (imported when used)."""
     return importlib.import_module(f"vlref.cli.{COMMANDS[name][0]}")
+
+
+def program_command(name: str):
+    """:func:`command` as the ``vlref`` program imports it: with the garbage collector off while the modules
+    (NumPy's, Numba's, vlref's: ~130 000 objects, none of them garbage) are imported, instead of its repeated
+    collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
+    frozen out of its sight (:func:`gc.freeze`, see :func:`main`)."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return command(name)
+    finally:
+        gc.freeze()
+        if enabled:
+            gc.enable()
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -136,25 +159,69 @@ def main(argv: list[str] | None = None) -> int:
     no partial output (files are written atomically, folders all or nothing: :mod:`vlref.io`).
 
     ``argv`` None: the program's own command line (the ``vlref`` executable, ``python -m vlref``), whose process
-    ends with the command. The objects that exist once the command's modules are imported, and again once it
-    has run, are then frozen out of the garbage collector's sight (:func:`gc.freeze`): later collections do not
-    walk NumPy's and Numba's modules and the loaded kernels' type records (~130 000 objects) again, and neither
-    does the interpreter's exit (a render's exit: 0.5-0.6 s on the dev box, 0.1 s frozen)."""
+    ends with the command. Its modules are imported with the collector off (:func:`program_command`); the objects
+    that exist once they are imported, and again once it has run, are then frozen out of the garbage collector's
+    sight (:func:`gc.freeze`): later collections do not walk NumPy's and Numba's modules and the loaded kernels'
+    type records (~130 000 objects) again, and neither does the interpreter's exit (a render's exit: 0.5-0.6 s on
+    the dev box, 0.1 s frozen). A command of
+    :data:`EXIT_AT_ONCE` then ends the process at once (:func:`exit_at_once`), without the tear-down of every
+    module and loaded kernel."""
     program = argv is None
+    argv = list(sys.argv[1:] if argv is None else argv)
     with _interruptible():
         try:
-            return _run(list(sys.argv[1:] if argv is None else argv), program)
+            code = _run(argv, program)
         except KeyboardInterrupt as exc:
             # on a line of its own: a progress bar cut short may have left the cursor after its text
             print("\r\x1b[K" if sys.stderr.isatty() else "\r", end="vlref: interrupted\n", file=sys.stderr)
-            return 128 + int(getattr(exc, "signum", signal.SIGINT))
+            code = 128 + int(getattr(exc, "signum", signal.SIGINT))
         finally:
             if program:
                 gc.freeze()
+    if program and _command_name(argv) in EXIT_AT_ONCE:
+        exit_at_once(code)
+    return code
+
+
+def exit_at_once(code: int) -> None:
+    """End this process now with exit status ``code``, doing what the interpreter's exit does that a command's
+    outcome depends on: the :mod:`atexit` handlers (temporary folders' finalizers, :mod:`multiprocessing`'s
+    clean-up of child processes, :mod:`logging`'s flush, Numba's and llvmlite's shutdown flags), then flushing
+    stdout and stderr (a flush that fails: status 120, as the interpreter's exit gives), then :func:`os._exit`.
+    What it skips is the tear-down of every module, object and loaded kernel (llvmlite disposing of each
+    kernel's machine code, the collector walking the frozen objects): 0.15-0.25 s after a 1080p render on the
+    dev box against 0.04-0.07 s (BENCHMARKS.md "Numba's start without scipy.linalg, the exit at once").
+
+    Returns without ending the process, leaving the exit to the interpreter, where another non-daemon thread
+    still runs (the interpreter waits for it) or stdout or stderr cannot be flushed before the handlers run.
+    For the ``vlref`` program's own process only (:func:`main` with ``argv`` None, :data:`EXIT_AT_ONCE`), and
+    the bench's process that measures it (:func:`vlref.bench.renders.bench_whole_render`)."""
+    if any(t is not threading.current_thread() and not t.daemon and t.is_alive() for t in threading.enumerate()):
+        return
+    try:
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+    except (OSError, ValueError):
+        return
+    atexit._run_exitfuncs()
+    status = code
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            if stream is not None:
+                stream.flush()
+        except (OSError, ValueError):
+            status = 120
+    os._exit(status)
+
+
+def _command_name(argv: list[str]) -> str | None:
+    """The sub-command ``argv`` names (a two-word one first), None when it names none."""
+    return " ".join(argv[:2]) if " ".join(argv[:2]) in COMMANDS else argv[0] if argv else None
 
 
 def _run(argv: list[str], program: bool = False) -> int:
-    name = " ".join(argv[:2]) if " ".join(argv[:2]) in COMMANDS else argv[0] if argv else None
+    name = _command_name(argv)
     if name not in COMMANDS:
         try:
             build_parser().parse_args(argv)  # --help, --version, or a usage error
@@ -162,9 +229,7 @@ def _run(argv: list[str], program: bool = False) -> int:
             return int(exc.code or 0)
         return 2  # pragma: no cover - parse_args always exits here
     rest = argv[len(name.split()):]
-    cmd, prefix = command(name), COMMANDS[name][1]
-    if program:
-        gc.freeze()  # the imports' objects: see main()
+    cmd, prefix = program_command(name) if program else command(name), COMMANDS[name][1]
     try:
         args = cmd.parser().parse_args(rest)
     except SystemExit as exc:

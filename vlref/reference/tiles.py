@@ -28,14 +28,14 @@ def tile_rows(height: int, rows_per_tile: int) -> list[tuple[int, int]]:
 
 def render_reference_tiled(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_TOL,
                            scheduler: str | None = None, rows_per_tile: int = 16, quiet: bool = False,
-                           shadow_samples: int = 512, max_intervals: int = 4000) -> ReferenceResult:
+                           shadow_samples: int = 512, max_intervals: int = 4000, rule: int = 15) -> ReferenceResult:
     """:func:`render_reference` of ``scene`` solved in bands of ``rows_per_tile`` rows on ``scheduler``
     (:func:`vlref.work_items.run_items`); the arrays equal the untiled result bit for bit. ``stats``:
     ``intervals`` and ``unconverged`` summed over the tiles, ``seconds`` the wall time, ``tiles``."""
     start = time.perf_counter()
     bands = tile_rows(scene.render.height, rows_per_tile)
     items = [Item(f"rows {y0}-{y1}", render_reference, (scene, rel_tol, abs_tol),
-                  {"shadow_samples": shadow_samples, "max_intervals": max_intervals, "rows": (y0, y1)})
+                  {"shadow_samples": shadow_samples, "max_intervals": max_intervals, "rows": (y0, y1), "rule": rule})
              for y0, y1 in bands]
     h, w = scene.render.height, scene.render.width
     inscatter, final = np.zeros((h, w, 3)), np.zeros((h, w, 3))
@@ -52,6 +52,6 @@ def render_reference_tiled(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAUL
             counts[k] += tile.stats[k]
 
     run_items(items, scheduler, place, desc="reference tiles", quiet=quiet)
-    stats = {**counts, "rel_tol": rel_tol, "abs_tol": abs_tol, "shadow_samples": shadow_samples,
+    stats = {**counts, "rel_tol": rel_tol, "abs_tol": abs_tol, "shadow_samples": shadow_samples, "rule": rule,
              "seconds": time.perf_counter() - start, "shadow_boundaries": edges, "tiles": len(bands)}
     return ReferenceResult(inscatter, trans, final, error, float(error.max(initial=0.0)), stats)

@@ -1,0 +1,87 @@
+"""Numba's one-time initialisation without ``scipy.linalg`` (vlref.jit_init): a render leaves ``scipy.linalg``
+unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
+works in the same process afterwards. Each case runs in a fresh interpreter (the initialisation happens once a
+process)."""
+
+import json
+import subprocess
+import sys
+
+AFTER_RENDER = r"""
+import json, sys
+import numpy as np
+from numba import njit
+from vlref.render import prepare_frame
+from vlref.scene import load_scene
+
+prepare_frame(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
+state = {"scipy.linalg": "scipy.linalg" in sys.modules, "cython_blas": "scipy.linalg.cython_blas" in sys.modules}
+import numba.np.arraymath
+state["have_blas"] = numba.np.arraymath._HAVE_BLAS
+
+@njit(cache=False)
+def user_linear_algebra(a, b):
+    return np.dot(a, b), np.linalg.solve(a, b[:, 0])
+
+n = 6
+a = np.eye(n) * 4.0 + np.ones((n, n))  # symmetric, eigenvalues 4 (x n-1) and 4 + n: well conditioned
+b = np.arange(2 * n, dtype=np.float64).reshape(n, 2)
+dot, x = user_linear_algebra(a, b)
+# closed forms: (4 I + J) b = 4 b + (column sums); (4 I + J)^-1 = (I - J / (4 + n)) / 4
+state["dot_error"] = float(np.max(np.abs(dot - (4.0 * b + b.sum(axis=0)))))
+state["solve_residual"] = float(np.max(np.abs(a @ x - b[:, 0])))
+state["solve_error"] = float(np.max(np.abs(x - (b[:, 0] - b[:, 0].sum() / (4.0 + n)) / 4.0)))
+import scipy.linalg.cython_blas
+cb = sys.modules["scipy.linalg.cython_blas"]
+state["same_module"] = scipy.linalg.cython_blas is cb  # the package's attribute: a complete import
+state["ddot"] = "ddot" in cb.__pyx_capi__
+print(json.dumps(state))
+"""
+
+LINALG_FIRST = r"""
+import json, sys
+import scipy.linalg
+from vlref.jit_init import initialise_numba
+initialise_numba()
+import numba.np.arraymath
+print(json.dumps({"have_blas": numba.np.arraymath._HAVE_BLAS,
+                  "cython_blas": sys.modules.get("scipy.linalg.cython_blas") is not None}))
+"""
+
+NOT_LOADABLE = r"""
+import importlib.util, json, sys
+from vlref import jit_init
+
+
+def refuse(spec):  # loading the extension on its own fails (the import system's own path does not use this name)
+    raise ImportError("refused")
+
+
+importlib.util.module_from_spec = refuse
+jit_init.initialise_numba()
+import numba.np.arraymath
+print(json.dumps({"have_blas": numba.np.arraymath._HAVE_BLAS, "scipy.linalg": "scipy.linalg" in sys.modules}))
+"""
+
+
+def _state(code: str) -> dict:
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def test_a_render_leaves_scipy_linalg_unimported_and_user_linear_algebra_works():
+    state = _state(AFTER_RENDER)
+    assert not state["scipy.linalg"] and not state["cython_blas"]  # the render did not import the package
+    assert state["have_blas"] is True  # Numba's check found the BLAS: np.dot takes its BLAS path
+    assert state["dot_error"] == 0.0  # small integers: exact in any summation order
+    assert state["solve_residual"] <= 1e-13 and state["solve_error"] <= 1e-14
+    assert state["same_module"] and state["ddot"]  # the package imported afterwards, its extension complete
+
+
+def test_with_scipy_linalg_already_imported_numba_initialises_as_usual():
+    state = _state(LINALG_FIRST)
+    assert state == {"have_blas": True, "cython_blas": True}
+
+
+def test_where_the_extension_cannot_be_loaded_alone_numba_initialises_as_usual():
+    assert _state(NOT_LOADABLE) == {"have_blas": True, "scipy.linalg": True}

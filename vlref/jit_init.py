@@ -1,0 +1,84 @@
+"""Numba's one-time initialisation of its CPU target, without importing ``scipy.linalg``.
+
+The first compiled call of a process (a kernel compiled, or loaded from Numba's cache) initialises Numba's CPU
+target: ``BaseContext.refresh`` imports ``numba.np.*``, ``numba.typed`` and the other implementation modules,
+installs ~2 300 typing and lowering registrations and compiles the NRT functions. Part of it, the body of
+``numba.np.arraymath``, asks whether a BLAS is there for ``np.dot`` (``_HAVE_BLAS = _check_blas()``, which runs
+``numba.np.linalg.ensure_blas``: ``import scipy.linalg.cython_blas``). That import first executes the package
+``scipy.linalg``'s ``__init__`` (all of SciPy's dense linear algebra: 0.17-0.2 s on the 2-core dev box, 0.27 s on
+the 16-core device, BENCHMARKS.md "Numba's start without scipy.linalg") before the extension module itself
+(0.01 s), and vlref's kernels use no BLAS.
+
+:func:`initialise_numba` runs that initialisation with ``scipy.linalg.cython_blas`` loaded on its own, from its
+file, through the import system's own loader (``importlib.machinery.PathFinder`` on ``scipy/linalg``): the module
+is entered in ``sys.modules`` under its name for the duration of ``refresh()`` only, Numba's unchanged check
+(``ensure_blas``, with its integer-width test where the Numba has one) imports it from there and answers as it
+would have, and the entry is removed again, so the import system's state afterwards is the one before, less
+``scipy.linalg``. Nothing of Numba is patched: a later ``import scipy.linalg.cython_blas`` (Numba's own, at a
+user's first ``np.dot`` or ``np.linalg`` call in compiled code) imports the package and finds the extension
+already initialised (the same module object; tests/test_jit_init.py). Where any precondition fails (Numba's
+target already initialised, ``scipy.linalg`` or the module already imported, SciPy or the file not found, the
+load raising, a Numba without ``numba.core.registry.cpu_target``), Numba initialises as it always does.
+
+``render`` and ``render_reference`` call it before their first kernel; it costs nothing once Numba is initialised.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.machinery
+import importlib.util
+import os
+import sys
+
+from numba.core import compiler_lock, registry
+
+__all__ = ["initialise_numba", "BLAS_MODULE"]
+
+BLAS_MODULE = "scipy.linalg.cython_blas"
+"""The module Numba's BLAS check imports (``numba.np.linalg.ensure_blas``)."""
+
+_done = [False]
+
+
+def _cython_blas_alone():
+    """``scipy.linalg.cython_blas`` executed from its file without its package (None: not found or not loadable)."""
+    scipy = sys.modules.get("scipy")  # imported by Numba's own import (its version check)
+    if scipy is None or getattr(scipy, "__path__", None) is None:
+        return None
+    spec = importlib.machinery.PathFinder.find_spec(BLAS_MODULE, [os.path.join(p, "linalg") for p in scipy.__path__])
+    if spec is None or spec.loader is None:
+        return None
+    try:
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+    except Exception:  # any failure: Numba's own import path decides, as without this module
+        return None
+    return module
+
+
+def initialise_numba() -> None:
+    """Initialise Numba's CPU target now (what the first compiled call would do), with its BLAS check served by
+    ``scipy.linalg.cython_blas`` alone (module docstring). Idempotent. It holds Numba's compiler lock while it
+    runs, as Numba's own loading of a cached kernel does, so a kernel loaded or compiled meanwhile on another
+    thread waits for it."""
+    if _done[0]:
+        return
+    _done[0] = True
+    cpu_target = getattr(registry, "cpu_target", None)
+    if cpu_target is None:  # a Numba without it: its first kernel initialises it
+        return
+    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext():
+        module = None
+        if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
+                and BLAS_MODULE not in sys.modules:
+            module = _cython_blas_alone()
+        if module is None:
+            cpu_target.target_context.refresh()
+            return
+        sys.modules[BLAS_MODULE] = module
+        try:
+            cpu_target.target_context.refresh()
+        finally:
+            if sys.modules.get(BLAS_MODULE) is module:
+                del sys.modules[BLAS_MODULE]
