@@ -30,7 +30,14 @@ import resource
 own, children = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
 print(json.dumps({"cpu_main_s": own.ru_utime + own.ru_stime, "cpu_children_s": children.ru_utime + children.ru_stime}))
 '''
-"""Appended to ``vlref.bench.renders._WHOLE`` (the first render's child): the CPU seconds of its processes."""
+"""Put into ``vlref.bench.renders._WHOLE`` (the first render's child) after its report: the CPU seconds of its
+processes (before the child's exit, which may end the process at once)."""
+
+
+def _with_cpu(child: str) -> str:
+    lines = child.split("\n")
+    report = max(i for i, line in enumerate(lines) if line.startswith("print(json.dumps("))
+    return "\n".join(lines[:report + 1] + CPU.strip("\n").split("\n") + lines[report + 1:])
 
 WARM = r'''
 import json, sys
@@ -64,7 +71,7 @@ print(json.dumps(out))
 '''
 
 
-def _run(tree: str, code: str, args: list, cache: str, threads: int | None) -> dict:
+def _run(tree: str, code: str, args: list, cache: str, threads: int | None, reports: int = 1) -> dict:
     path = os.pathsep.join(p for p in (os.path.abspath(tree), os.environ.get("PYTHONPATH")) if p)
     env = dict(os.environ, PYTHONPATH=path, NUMBA_CACHE_DIR=cache)
     pin = ["taskset", "-c", f"0-{threads - 1}"] if threads else []
@@ -73,7 +80,9 @@ def _run(tree: str, code: str, args: list, cache: str, threads: int | None) -> d
     if proc.returncode:
         raise SystemExit(f"{tree}: {proc.stderr[-3000:]}")
     lines = proc.stdout.strip().splitlines()
-    report = {**json.loads(lines[-2]), **json.loads(lines[-1])} if code.endswith(CPU) else json.loads(lines[-1])
+    report = {}
+    for line in lines[-reports:]:  # the cold child's report, then its CPU
+        report.update(json.loads(line))
     report["process_s"] = time.perf_counter() - start
     return report
 
@@ -98,7 +107,7 @@ def main(what: str, tree_a: str, tree_b: str, rounds: str = "2", threads: str = 
                 cache = os.path.join(work, f"nc-{label}")  # warm: the cache of the tree's last cold run, if any
                 if kind == "cold":
                     shutil.rmtree(cache, ignore_errors=True)
-                    report = _run(trees[label], _WHOLE + CPU, [scene_file], cache, cap)
+                    report = _run(trees[label], _with_cpu(_WHOLE), [scene_file], cache, cap, reports=2)
                 else:
                     report = _run(trees[label], WARM, [width, height], cache, cap)
                 print(label, kind, json.dumps(report), flush=True)
