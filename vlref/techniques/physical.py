@@ -27,9 +27,11 @@ from ..scene.technique_params import resolved
 
 __all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
 
-# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.03-0.05 s
-# and gives each thread tens of the march's tasks to take (vlref.parallel), so few wait at its end
-SAMPLES_PER_BAND = 500_000
+# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.04 s on a
+# 16-core server (~50 M samples/s a thread), ~0.1-0.2 s on a busy 2-core box. Each band is one parallel launch:
+# the call, the threads' wake-up and the band's tail (threads idle while the last tiles finish) cost
+# ~0.5 ms on the server, 5 % of a 0.01 s band (BENCHMARKS.md "The march in fewer bands")
+SAMPLES_PER_BAND = 2_000_000
 
 
 def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, steps: int, sampling: str):
