@@ -32,11 +32,10 @@ TIMEFORMAT=%R
 probe() { { echo -n "$1: "; { time python3 -c "$PROBE" ; } 2>&1 | tr '\n' ' '; echo; } >> "$OUT/import.txt"; }
 python3 -X importtime -c "$PROBE" 2> "$OUT/importtime_plain.txt"
 probe plain
-{ time timeout 60 python3 -m compileall -q -j 0 "$SP/numpy" "$SP/numba" "$SP/llvmlite" "$SP/scipy" > /dev/null 2>&1; } 2> "$OUT/compile_time.txt"
-ls -d /tmp/pyc > /dev/null 2>&1 && echo "pyc prefix already there" >> "$OUT/compile_time.txt"
+echo -n "compileall into /tmp/pyc, s: " >> "$OUT/import.txt"
 export PYTHONPYCACHEPREFIX=/tmp/pyc
-{ time { timeout 90 python3 -m compileall -q -j 0 "$SP/numpy" "$SP/numba" "$SP/llvmlite" "$SP/scipy" "$SP/yaml" "$STD" \
-  vlref /tmp/site "$B/vlref" > /dev/null 2>&1; python3 -m compileall -q -i /tmp/mods.txt > /dev/null 2>&1; } ; } 2>> "$OUT/compile_time.txt"
+{ time { timeout 60 python3 -m compileall -q -j 0 "$SP/numpy" "$SP/numba" "$SP/llvmlite" "$SP/scipy" "$SP/yaml" \
+  vlref /tmp/site "$B/vlref" > /dev/null 2>&1; python3 -m compileall -q -i /tmp/mods.txt > /dev/null 2>&1; } ; } 2>> "$OUT/import.txt"
 for m in pyc pyc plain plain pyc; do if [ $m = pyc ]; then probe pyc; else (unset PYTHONPYCACHEPREFIX; probe plain); fi; done
 python3 -X importtime -c "$PROBE" 2> "$OUT/importtime_pyc.txt"
 PYTHONPATH=/tmp/site timeout 150 python3 "$B/benchmarks/startup_ab.py" "$OUT" 1 "$B" > "$OUT/startup_ab.txt" 2>&1
