@@ -38,7 +38,7 @@ from vlref.scene.technique_params import resolved  # noqa: E402
 from vlref.techniques import physical  # noqa: E402
 
 
-def main(out_path: str, steps: int, width: int = 1920, height: int = 1080) -> None:
+def main(out_path: str, steps: int = 64, width: int = 1920, height: int = 1080) -> None:
     report = {"threads": numba.get_num_threads(), "threading_layer": None}
     scene = bench_scene(width, height, steps, "four", 1024)
     frame = prepare_frame(scene)
