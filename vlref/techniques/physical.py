@@ -27,10 +27,10 @@ from ..scene.technique_params import resolved
 
 __all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
 
-# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.04 s on a
-# 16-core server (~50 M samples/s a thread), ~0.1-0.2 s on a busy 2-core box. Each band is one parallel launch:
-# the call, the threads' wake-up and the band's tail (threads idle while the last tiles finish) cost
-# ~0.5 ms on the server, 5 % of a 0.01 s band (BENCHMARKS.md "The march in fewer bands")
+# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.035 s on a
+# 16-core server, ~0.1 s on a busy 2-core box. Each band is one parallel launch (~0.1 ms), a tail (threads idle
+# while its last tiles finish) and the first touch of its output pages by all threads at once: on the server 64
+# bands of 0.01 s took 0.04 s (7 %) more than 16 (BENCHMARKS.md "The march in fewer bands")
 SAMPLES_PER_BAND = 2_000_000
 
 
