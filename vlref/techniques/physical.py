@@ -27,9 +27,11 @@ from ..scene.technique_params import resolved
 
 __all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
 
-# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.03-0.05 s
-# and gives each thread tens of the march's tasks to take (vlref.parallel), so few wait at its end
-SAMPLES_PER_BAND = 500_000
+# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.035 s on a
+# 16-core server, ~0.1 s on a busy 2-core box. Each band is one parallel launch (~0.1 ms), a tail (threads idle
+# while its last tiles finish) and the first touch of its output pages by all threads at once: on the server 64
+# bands of 0.01 s took 0.04 s (7 %) more than 16 (BENCHMARKS.md "The march in fewer bands")
+SAMPLES_PER_BAND = 2_000_000
 
 
 def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, steps: int, sampling: str):
