@@ -154,29 +154,6 @@ def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
 
 
 @njit(cache=True, fastmath=False)
-def _tap_rgb(flat, ra, rb, ty, u, du, step, n, W, lo, hi, offset, w, acc):
-    """:func:`_tap_columns` then :func:`_tap_rows` for three channels and clamped addressing, in one loop."""
-    prefer_wide_vectors()
-    arrays_do_not_overlap()
-    for x in range(n):
-        if step:
-            u[x] = u[x] - du[x]
-        xx = u[x] * W - 0.5
-        xf = math.floor(xx)
-        t = xx - xf
-        a = np.uint64((int(min(max(xf, lo), hi)) + offset) * 3)
-        b = np.uint64((int(min(max(xf + 1.0, lo), hi)) + offset) * 3)
-        for ch in range(3):
-            t00 = flat[ra + a + np.uint64(ch)]
-            t10 = flat[ra + b + np.uint64(ch)]
-            t01 = flat[rb + a + np.uint64(ch)]
-            t11 = flat[rb + b + np.uint64(ch)]
-            top = t00 + t * (t10 - t00)
-            bottom = t01 + t * (t11 - t01)
-            acc[ch, x] = acc[ch, x] + (top + ty * (bottom - top)) * w
-
-
-@njit(cache=True, fastmath=False)
 def _row_index(yf, n, lo, hi, offset, repeat):
     """Array row of texel row ``yf`` (an integral float) of ``n``: ``yf mod n`` when ``repeat``, else
     ``clamp(yf, lo, hi) + offset`` (clamped as :func:`_tap_columns` does)."""
@@ -221,11 +198,9 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
             w = 1.0
             dec = 1.0
             for i in range(iterations + 1):
-                fused = C == 3 and not repeat
                 if i > 0:
-                    if not fused:
-                        for x in range(n):
-                            u[x] = u[x] - du[x]
+                    for x in range(n):
+                        u[x] = u[x] - du[x]
                     v = v - dv
                     w = dec * tap_scale * weight
                     dec = dec * decay
@@ -233,11 +208,8 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
                 yf = math.floor(yy)
                 ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
                 rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
-                if fused:
-                    _tap_rgb(flat, ra, rb, yy - yf, u, du, i > 0, n, W, lo_x, hi_x, offset, w, acc)
-                else:
-                    _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
-                    _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
+                _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
             for x in range(n):
                 for ch in range(C):
                     out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
