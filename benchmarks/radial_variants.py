@@ -1,0 +1,85 @@
+"""Radial-blur variants in one process (BENCHMARKS.md, "The radial blur's tile sizes and loop shapes"): copies of
+``vlref/post/radial.py`` with one line changed each, checked bit for bit against the unchanged copy on the bench's
+input, then timed alternated (the list, then the list reversed, three rounds): 1080p, 64 taps on every core (wall
+ms) and 960x540 on one thread (CPU ns per pixel and tap). One JSON line on stdout.
+
+Run from a tree's root (``PYTHONPATH=$PWD``); compile each copy first, in processes of their own (in parallel):
+
+    python3 benchmarks/radial_variants.py warm DIR NAME      # once per name, DIR: where the copies are written
+    python3 benchmarks/radial_variants.py time DIR NAME...   # "main" is the unchanged copy; list it first
+"""
+
+import argparse
+import importlib
+import json
+import pathlib
+import sys
+import time
+
+import numba
+import numpy as np
+
+SOURCE = pathlib.Path(__file__).resolve().parents[1] / "vlref" / "post" / "radial.py"
+VARIANTS = {
+    "main": ("", ""),
+    "tile128": ("RADIAL_TILE = 256", "RADIAL_TILE = 128"),
+    "tile512": ("RADIAL_TILE = 256", "RADIAL_TILE = 512"),
+    "run4": ("RADIAL_RUN = 16", "RADIAL_RUN = 4"),
+    "run64": ("RADIAL_RUN = 16", "RADIAL_RUN = 64"),
+    "ymm": ("    prefer_wide_vectors()\n    arrays_do_not_overlap()\n    for ch", "    arrays_do_not_overlap()\n    for ch"),
+}
+
+
+def variant(folder: pathlib.Path, name: str):
+    """The copy of radial.py with ``VARIANTS[name]``'s replacement, imported as ``radial_NAME`` from ``folder``."""
+    old, new = VARIANTS[name]
+    text = SOURCE.read_text()
+    if old and text.count(old) != 1:
+        raise SystemExit(f"{name}: {old!r} is not in {SOURCE} exactly once")
+    path = folder / f"radial_{name}.py"
+    text = text.replace(old, new) if old else text
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+    if str(folder) not in sys.path:
+        sys.path.insert(0, str(folder))
+    return importlib.import_module(f"radial_{name}")
+
+
+def blur(module, image):
+    return module.radial_blur(image, (0.5, 0.4), 64, 0.9, 0.5, 0.97, 0.3)  # the bench's call (post_passes)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("phase", choices=("warm", "time"))
+    parser.add_argument("folder", type=pathlib.Path)
+    parser.add_argument("names", nargs="+", choices=tuple(VARIANTS))
+    args = parser.parse_args()
+    args.folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(0)
+    modules = {name: variant(args.folder, name) for name in args.names}
+    if args.phase == "warm":
+        for module in modules.values():
+            blur(module, rng.random((36, 64, 3)))
+        return
+    big, small = rng.random((1080, 1920, 3)), rng.random((540, 960, 3))
+    reference = blur(modules[args.names[0]], big)
+    same = {name: bool((blur(m, big) == reference).all()) for name, m in modules.items()}
+    runs = {name: {"ms": [], "ns_one_thread": []} for name in args.names}
+    order = args.names + args.names[::-1]
+    for _ in range(3):
+        numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+        for name in order:
+            start = time.perf_counter()
+            blur(modules[name], big)
+            runs[name]["ms"].append(round(1e3 * (time.perf_counter() - start), 2))
+        numba.set_num_threads(1)
+        for name in order:
+            start = time.process_time()
+            blur(modules[name], small)
+            runs[name]["ns_one_thread"].append(round((time.process_time() - start) / (540 * 960 * 65) * 1e9, 3))
+    print(json.dumps({"same_bits_as_first": same, "runs": runs}))
+
+
+if __name__ == "__main__":
+    main()
