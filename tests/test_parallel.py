@@ -119,3 +119,22 @@ def test_work_called_by_address_does_the_same_and_is_not_linked_into_the_kernel(
     assert isinstance(signature[-1], types.FunctionType)
     assert "_count_tasks" in _count_linked.inspect_llvm(_count_linked.signatures[0])
     assert "_count_tasks" not in _count_by_address.inspect_llvm(signature)
+
+
+def test_work_is_found_again_by_the_arguments_types_without_typing_them(monkeypatch):
+    """The second look-up of a work for arguments of the same types (other values, other arrays) returns the kept
+    Work without ``numba.typeof`` (the ray cast's records took ~0.2 ms a call to type); arguments of other types
+    (dtype, layout, a record of other arrays) get their own."""
+    hits = np.zeros(7, dtype=np.int64)
+    first = work(_count_tasks, COUNTER, 7, hits)
+
+    def no_typeof(value):
+        raise AssertionError(f"typed again: {value!r}")
+
+    monkeypatch.setattr(numba, "typeof", no_typeof)
+    assert work(_count_tasks, COUNTER, 12, np.ones(40, dtype=np.int64)) is first
+    monkeypatch.undo()
+    assert work(_count_tasks, COUNTER, 7, np.zeros(7, dtype=np.int32)) is not first
+    strided = np.zeros(14, dtype=np.int64)[::2]
+    other = work(_count_tasks, COUNTER, 7, strided)
+    assert other is not first and other.signature().args[-1].layout == "A"

@@ -43,6 +43,11 @@ from numba.core.types.function_type import WrapperAddressProtocol
 from numba.core.typing import signature
 from numba.extending import intrinsic
 
+try:  # Numba's own typing cache key: what its dispatcher looks up a value's type by, in C (~0.2 µs)
+    from numba._dispatcher import compute_fingerprint
+except ImportError:  # a Numba without it: the key is the type itself
+    compute_fingerprint = None
+
 __all__ = ["WORKERS", "COUNTER", "take", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
@@ -121,12 +126,27 @@ class Work(WrapperAddressProtocol):
 _WORK: dict = {}
 
 
+def _type_key(value):
+    """What :func:`work` keys a value's Numba type by: the type itself where given, else the fingerprint Numba's
+    dispatcher types its arguments by (one fingerprint, one type), else ``numba.typeof``."""
+    if isinstance(value, types.Type):
+        return value
+    if compute_fingerprint is not None:
+        try:
+            return compute_fingerprint(value)
+        except NotImplementedError:
+            pass
+    return numba.typeof(value)
+
+
 def work(function, *args) -> Work:
     """``function`` (an ``njit`` dispatcher returning nothing) as a :class:`Work` for arguments of the types of
     ``args`` (values, or Numba types such as :data:`COUNTER`): pass it to the kernel whose workers call it with
-    arguments of these types (borrowed views have their arrays' types). One per function and types, kept."""
-    argtypes = tuple(a if isinstance(a, types.Type) else numba.typeof(a) for a in args)
-    key = (function, argtypes)
+    arguments of these types (borrowed views have their arrays' types). One per function and types, kept; found
+    again by the arguments' fingerprints (:func:`_type_key`): ``numba.typeof`` of the records of a ray cast took
+    ~0.2 ms a call, a fifth of a 320x180 ray cast on 16 threads (BENCHMARKS.md "The work's look-up by fingerprint")."""
+    key = (function, tuple(_type_key(a) for a in args))
     if key not in _WORK:
+        argtypes = tuple(a if isinstance(a, types.Type) else numba.typeof(a) for a in args)
         _WORK[key] = Work(function, signature(types.none, *argtypes))
     return _WORK[key]
