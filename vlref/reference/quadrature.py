@@ -79,11 +79,12 @@ RAYS_PER_BAND = 12_500
 
 @njit(cache=True, fastmath=False)
 def gk(a, b, ray, ctx, rule):
-    """Kronrod integral (RGB) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7; :data:`RULES`) nodes and
-    its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
+    """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7; :data:`RULES`) nodes
+    and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
-    Gauss nodes are the odd ``i`` and the centre (``m`` odd for both rules), Gauss weight ``wg[i // 2]``."""
+    Gauss nodes are the odd ``i`` and the centre (``m`` odd for both rules), Gauss weight ``wg[i // 2]``. The sums
+    are scalars per channel (no arrays: this is the reference's innermost loop)."""
     if rule == 7:
         xgk, wgk, wg = XGK7, WGK7, WG3
     else:
@@ -91,30 +92,38 @@ def gk(a, b, ray, ctx, rule):
     m = xgk.size - 1
     c = 0.5 * (a + b)
     h = 0.5 * (b - a)
-    k = np.zeros(3)
-    g = np.zeros(3)
-    kabs = np.zeros(3)
-    for i in range(m + 1):
-        if i == m:
-            f = ig.inscatter(c, ray, ctx)
-            for ch in range(3):
-                k[ch] += wgk[m] * f[ch]
-                kabs[ch] += wgk[m] * abs(f[ch])
-                g[ch] += wg[m // 2] * f[ch]
-            continue
-        f1 = ig.inscatter(c - h * xgk[i], ray, ctx)
-        f2 = ig.inscatter(c + h * xgk[i], ray, ctx)
-        for ch in range(3):
-            s = f1[ch] + f2[ch]
-            k[ch] += wgk[i] * s
-            kabs[ch] += wgk[i] * (abs(f1[ch]) + abs(f2[ch]))
-            if i % 2 == 1:
-                g[ch] += wg[i // 2] * s
-    err = 0.0
-    for ch in range(3):
-        k[ch] *= h
-        err = max(err, abs(k[ch] - g[ch] * h), ROUNDOFF * kabs[ch] * abs(h))
-    return k, err
+    k0 = k1 = k2 = g0 = g1 = g2 = a0 = a1 = a2 = 0.0
+    for i in range(m):  # the symmetric pairs, then the centre (the order of the sums is part of the bits)
+        p0, p1, p2 = ig.inscatter(c - h * xgk[i], ray, ctx)
+        q0, q1, q2 = ig.inscatter(c + h * xgk[i], ray, ctx)
+        s0, s1, s2 = p0 + q0, p1 + q1, p2 + q2
+        k0 += wgk[i] * s0
+        k1 += wgk[i] * s1
+        k2 += wgk[i] * s2
+        a0 += wgk[i] * (abs(p0) + abs(q0))
+        a1 += wgk[i] * (abs(p1) + abs(q1))
+        a2 += wgk[i] * (abs(p2) + abs(q2))
+        if i % 2 == 1:
+            g0 += wg[i // 2] * s0
+            g1 += wg[i // 2] * s1
+            g2 += wg[i // 2] * s2
+    f0, f1, f2 = ig.inscatter(c, ray, ctx)
+    k0 += wgk[m] * f0
+    k1 += wgk[m] * f1
+    k2 += wgk[m] * f2
+    a0 += wgk[m] * abs(f0)
+    a1 += wgk[m] * abs(f1)
+    a2 += wgk[m] * abs(f2)
+    g0 += wg[m // 2] * f0
+    g1 += wg[m // 2] * f1
+    g2 += wg[m // 2] * f2
+    k0 *= h
+    k1 *= h
+    k2 *= h
+    err = max(0.0, abs(k0 - g0 * h), ROUNDOFF * a0 * abs(h))
+    err = max(err, abs(k1 - g1 * h), ROUNDOFF * a1 * abs(h))
+    err = max(err, abs(k2 - g2 * h), ROUNDOFF * a2 * abs(h))
+    return k0, k1, k2, err
 
 
 @njit(cache=True, fastmath=False)
@@ -133,7 +142,7 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
     """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]``, at most
     ``max(max_intervals, n_edges)`` intervals, in the arrays of ``work`` (:func:`scratch`).
 
-    Returns ``(integral RGB, error estimate, intervals used, converged)``.
+    Returns ``(integral RGB (a tuple), error estimate, intervals used, converged)``.
     """
     cap = max(max_intervals, n_edges)
     _, _, lo, hi, val, err, frozen = work
@@ -141,32 +150,34 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
     for i in range(n_edges - 1):
         if edges[i + 1] > edges[i]:
             lo[n], hi[n] = edges[i], edges[i + 1]
-            val[n], err[n] = gk(lo[n], hi[n], ray, ctx, rule)
+            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule)
             frozen[n] = False
             n += 1
     while True:
-        total = np.zeros(3)
+        t0 = t1 = t2 = 0.0
         e_sum = 0.0
         worst = -1
         for i in range(n):
-            total += val[i]
+            t0 += val[i, 0]
+            t1 += val[i, 1]
+            t2 += val[i, 2]
             e_sum += err[i]
             if not frozen[i] and (worst < 0 or err[i] > err[worst]):
                 worst = i
-        tol = max(rel_tol * max(abs(total[0]), abs(total[1]), abs(total[2])), abs_tol)
+        tol = max(rel_tol * max(abs(t0), abs(t1), abs(t2)), abs_tol)
         if e_sum <= tol:
-            return total, e_sum, n, True
+            return (t0, t1, t2), e_sum, n, True
         if worst < 0 or n >= cap:
-            return total, e_sum, n, False
+            return (t0, t1, t2), e_sum, n, False
         a, b = lo[worst], hi[worst]
         m = 0.5 * (a + b)
         if not (a < m < b) or (b - a) <= 1e-14 * max(1.0, abs(m)):
             frozen[worst] = True
             continue
         hi[worst] = m
-        val[worst], err[worst] = gk(a, m, ray, ctx, rule)
+        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule)
         lo[n], hi[n] = m, b
-        val[n], err[n] = gk(m, b, ray, ctx, rule)
+        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule)
         frozen[n] = False
         n += 1
 
@@ -233,7 +244,7 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
             m += 1
     edges[m] = t1
     m += 1
-    edges[:m] = np.sort(edges[:m])
+    edges[:m].sort()
     # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated. The box's entry and
     # exit are edges (split_points), so the pieces kept are the same pieces.
     inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
@@ -264,7 +275,7 @@ def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_s
         ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
         total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
                                                max_intervals, rule, work)
-        out[y, x] = total
+        out[y, x, 0], out[y, x, 1], out[y, x, 2] = total
         err[y, x] = e
         used[y, x] = n
         ok[y, x] = good
