@@ -8,6 +8,7 @@
   temporary file or folder left behind.
 """
 
+import ctypes
 import os
 import signal
 import subprocess
@@ -240,6 +241,22 @@ def test_a_signal_that_lands_in_a_finalizer_still_interrupts_the_command():
         with _interruptible():
             obj = SignalledOnFree()
             del obj
+            after.append("ran on")
+    assert caught.value.signum == signal.SIGTERM and after == []
+
+
+def test_a_signal_that_lands_in_an_llvmlite_callback_still_interrupts_the_command():
+    """A signal handled while LLVM calls llvmlite's Python code back through ctypes (its object cache's notify,
+    while Numba compiles or loads a kernel) interrupts the command: raised in the frame that made the foreign call,
+    not inside the callback, where ctypes would print "Exception ignored on calling ctypes callback function" and go
+    on (a ``vlref bench`` under SIGTERM once exited 0 so)."""
+    namespace = {"__name__": "llvmlite.binding.executionengine", "os": os, "signal": signal}
+    exec("def notify():\n    os.kill(os.getpid(), signal.SIGTERM)\n    notify.ran_on = True\n", namespace)
+    callback = ctypes.CFUNCTYPE(None)(namespace["notify"])
+    after = []
+    with pytest.raises(Interrupted) as caught:
+        with _interruptible():
+            callback()  # through C, as LLVM calls it
             after.append("ran on")
     assert caught.value.signum == signal.SIGTERM and after == []
 
