@@ -223,10 +223,8 @@ def build_shadow_maps(scene, camera: Camera, geometry, packed: PackedLights) -> 
     # every face cast into its slice of the one table (a table of the faces' own arrays joined was a copy of it)
     data = np.empty(offset, dtype=np.float32)
     tint = np.empty((offset if want_tint else 0, 4), dtype=np.float32)
-    cast_chunks = None  # the work of _cast_face (vlref.parallel.work), looked up once: every face has these types
     for (face, ortho, res, sh), (_, _, start, size) in zip(casts, names):
         args = (geo, face, bool(ortho), int(res), float(sh.bias), float(sh.slope_bias), want_tint,
                 data[start:start + size], tint[start:start + size] if want_tint else tint)
-        cast_chunks = cast_chunks or work(_cast_chunks, COUNTER, *args)
-        _cast_face(*args, cast_chunks)
+        _cast_face(*args, work(_cast_chunks, COUNTER, *args))
     return ShadowMaps(ints, floats, data, tint, names)

@@ -119,11 +119,11 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
-from ..parallel import COUNTER, WORKERS, Work, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..phase import hg
 from .segments import light_segment
 
-__all__ = ["march_physical", "march_work", "LANES", "TILE_W", "TILE_H"]
+__all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
 
 LANES = 64  # (pixel, light) pairs per packet
 TILE_W, TILE_H = 8, 16  # a task: a tile of TILE_W x TILE_H pixels, two packets of 8 x 8 (module docstring)
@@ -640,7 +640,7 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
 
 
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                   per_light, transmittance, rows, march_tasks=None):
+                   per_light, transmittance, rows):
     """Fill the rows ``rows = (first, end)`` (int64, ``first <= end <= H``) of ``per_light`` (n_lights, H, W, 3)
     and ``transmittance`` (H, W) (module docstring); the other rows are left as they are.
 
@@ -661,22 +661,12 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     marched in packets of up to ``LANES`` (pixel, light) pairs. The workers get the arrays without reference
     counts (:func:`vlref.parallel.borrowed`: the stages take the records on every step). The kernel
     (:func:`_march_kernel`) calls :func:`_march_tasks` by address (:func:`vlref.parallel.work`), which borrows
-    them. ``march_tasks``: that :class:`~vlref.parallel.Work` for these arguments' types (:func:`march_work`), or
-    None to look it up (about 0.2 ms: the records' types); a caller marching many bands looks it up once.
+    them.
     """
-    if march_tasks is None:
-        march_tasks = march_work(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction,
-                                 leg_steps, per_light, transmittance, rows)
-    _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                  per_light, transmittance, rows, march_tasks)
-
-
-def march_work(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-               per_light, transmittance, rows) -> Work:
-    """:func:`_march_tasks` as the :class:`~vlref.parallel.Work` of :func:`march_physical` with these arguments'
-    types (:func:`vlref.parallel.work`)."""
-    return work(_march_tasks, COUNTER, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium,
-                lights, shadows, geo, per_light, transmittance)
+    args = (origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps, per_light,
+            transmittance, rows)
+    _march_kernel(*args, work(_march_tasks, COUNTER, rows, steps, light_extinction, leg_steps, origin, dirs, t_end,
+                              offsets, medium, lights, shadows, geo, per_light, transmittance))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", parallel=True)

@@ -19,7 +19,7 @@ import numba
 import numpy as np
 
 from ..march.patterns import offsets
-from ..march.physical import TILE_H, march_physical, march_work
+from ..march.physical import TILE_H, march_physical
 from ..medium import pack_medium
 from ..post.composite import composite_physical, sum_lights
 from ..progress import bands_for, row_bands
@@ -60,9 +60,8 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     per_band = SAMPLES_PER_BAND * numba.get_num_threads()
     args = (position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.table, traced,
             bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light, trans)
-    march_tasks = march_work(*args, (np.int64(0), np.int64(h)))  # once: the same types for every band
     for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band), TILE_H):
-        march_physical(*args, (np.int64(y0), np.int64(y1)), march_tasks)
+        march_physical(*args, (np.int64(y0), np.int64(y1)))
     return per_light, trans
 
 
