@@ -270,11 +270,12 @@ STALL_SECONDS = 15.0
 def _run_all_until_rendered(page, seconds: float = 120.0) -> int:
     """Run All Cells, and run them again while JupyterLab stalls, until the explorer's first render shows.
 
-    JupyterLab drops a "Run All" sent while the kernel is still connecting, and now and then (4 in 7 runs, 2 of 5 before this loop timed out, on a
-    loaded 2-core box) runs only the first cell of it: the kernel goes idle with the other cells never run, no
-    error anywhere (the notebook itself runs whole under nbmake). So the page is polled, and "Run All" is sent
-    again once the kernel has sat idle for ``STALL_SECONDS`` with a code cell that has not run. Returns how many
-    times it was sent; fails with the notebook's text when the render does not show within ``seconds``."""
+    JupyterLab drops a "Run All" sent while the kernel is still connecting, and now and then runs only the first
+    cell of it (on a loaded 2-core box: 2 of 5 runs timed out before this loop, 4 of 7 needed it since): the
+    kernel goes idle with the other cells never run, no error anywhere (the notebook runs whole under nbmake).
+    So the page is polled, and "Run All" is sent again once the kernel has sat idle for ``STALL_SECONDS`` with a
+    code cell that has not run. Returns how many times it was sent; fails with the notebook's text when the
+    render does not show within ``seconds``."""
     def run_all():
         page.get_by_role("menuitem", name="Run", exact=True).click()
         page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
