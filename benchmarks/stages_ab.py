@@ -1,0 +1,110 @@
+"""A/B of the frame's stages inside the process, for several trees on one machine (BENCHMARKS.md, "The scene
+colour's shadow rays inlined; the march's outputs faulted in on every thread").
+
+    python3 benchmarks/stages_ab.py OUT.json LABEL=TREE [LABEL=TREE ...]
+
+Each tree gets its own ``NUMBA_CACHE_DIR``, filled by one cold process per tree (all at once: ``vlref render``'s
+path of (b) at 320x180). Then the trees in order and in reverse (A, B, B, A), each process running the bench's
+``whole_render`` (a fresh ``vlref render`` of (b) at 1920x1080x64, four shadowed lights: wall and stage split),
+then in itself (medians after a warm-up call): the scene colour of (b) at 1080p (5 calls) and the march of (a) and
+(b) as the bench's ``march`` section times it (``physical.render`` of a prepared frame, 3 calls each), and SHA-256
+digests of the scene colour and of (a)'s and (b)'s march buffers, which must agree between the trees. A tree that
+has ``vlref.pages`` also times the march with the outputs from ``np.empty`` (``plain``) alternated with its own
+(``faulted``), three rounds.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+CHILD = """
+import hashlib, json, time
+import numpy as np
+from vlref.bench.config import bench_scene, median_time as median
+from vlref.bench.renders import _whole
+from vlref.lights.shading import scene_colour
+from vlref.render import prepare_frame
+from vlref.techniques import physical
+out = {}
+whole = _whole(None, 1920, 1080, 64, "four", 1024)
+out.update(whole_s=whole["process_s"], split=whole["split"])
+digest = lambda *arrays: hashlib.sha256(b"".join(np.ascontiguousarray(a).tobytes() for a in arrays)).hexdigest()[:16]
+frames = {}
+for name, lights in (("a", "one"), ("b", "four")):
+    scene = bench_scene(1920, 1080, 64, lights, 1024)
+    frame = prepare_frame(scene)
+    frame.shadow_maps()
+    frames[name] = (scene, frame)
+scene, frame = frames["b"]
+out["shading_s"] = median(lambda: scene_colour(frame.gbuffer, scene, frame.geometry, frame.lights), 5)
+out["colour_digest"] = digest(frame.scene_colour)
+for name, (scene, frame) in frames.items():
+    out[f"march_{name}_s"] = median(lambda: physical.render(scene, frame), 3)
+    res = physical.render(scene, frame)
+    out[f"march_{name}_digest"] = digest(*(res[k] for k in sorted(res)))
+try:
+    import vlref.pages
+except ImportError:
+    pass
+else:
+    faulted = physical.empty_faulted
+    plain = lambda shape, dtype=np.float64: np.empty(shape, dtype)
+    for name, (scene, frame) in frames.items():
+        runs = {"plain": [], "faulted": []}
+        for _ in range(3):
+            for label, fn in (("plain", plain), ("faulted", faulted)):
+                physical.empty_faulted = fn
+                runs[label].append(median(lambda: physical.render(scene, frame), 3))
+        physical.empty_faulted = faulted
+        out[f"march_{name}_plain_s"] = runs["plain"]
+        out[f"march_{name}_faulted_s"] = runs["faulted"]
+print(json.dumps(out))
+"""
+
+COLD = """
+import tempfile
+from vlref.bench.config import bench_scene
+from vlref.cli.render import render_to_folder
+with tempfile.TemporaryDirectory() as folder:
+    render_to_folder(bench_scene(320, 180, 64, "four", 1024), folder + "/out")
+"""
+
+
+def _env(tree: str, label: str) -> dict:
+    return dict(os.environ, PYTHONPATH=os.path.abspath(tree) + os.pathsep + os.environ.get("PYTHONPATH", ""),
+                NUMBA_CACHE_DIR=f"/tmp/nc-stages-{label}")
+
+
+def _median(values):
+    values = sorted(values)
+    return values[len(values) // 2]
+
+
+def main(out: str, trees: dict) -> None:
+    cold = {label: subprocess.Popen([sys.executable, "-c", COLD], cwd=tree, env=_env(tree, label),
+                                    stdout=subprocess.DEVNULL) for label, tree in trees.items()}
+    for label, proc in cold.items():
+        if proc.wait():
+            raise SystemExit(f"cold render of {label} failed")
+    results = {label: [] for label in trees}
+    for label in list(trees) + list(trees)[::-1]:
+        proc = subprocess.run([sys.executable, "-c", CHILD], cwd=trees[label], env=_env(trees[label], label),
+                              capture_output=True, text=True)
+        if proc.returncode:
+            raise SystemExit(f"{label}: {proc.stderr[-3000:]}")
+        results[label].append(json.loads(proc.stdout.strip().splitlines()[-1]))
+        print(label, json.dumps(results[label][-1]), flush=True)
+        with open(out, "w") as f:
+            json.dump(results, f, indent=1)
+    for key in ("colour_digest", "march_a_digest", "march_b_digest"):
+        print(key, {label: sorted({r[key] for r in rs}) for label, rs in results.items()})
+    for key in ("whole_s", "shading_s", "march_a_s", "march_b_s"):
+        print(key, "  ".join(f"{label} {' / '.join(f'{r[key]:.4f}' for r in rs)}" for label, rs in results.items()))
+    for stage in results[list(trees)[0]][0]["split"]:
+        print("split", stage, "  ".join(f"{label} {' / '.join('%.3f' % r['split'][stage] for r in rs)}"
+                                        for label, rs in results.items()))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], dict(arg.split("=", 1) for arg in sys.argv[2:]))
