@@ -1,5 +1,5 @@
 """A/B of the frame's stages inside the process, for several trees on one machine (BENCHMARKS.md, "The scene
-colour's shadow rays inlined; the march's outputs faulted in on every thread").
+colour's shadow rays inlined").
 
     python3 benchmarks/stages_ab.py OUT.json LABEL=TREE [LABEL=TREE ...]
 
@@ -8,9 +8,8 @@ path of (b) at 320x180). Then the trees in order and in reverse (A, B, B, A), ea
 ``whole_render`` (a fresh ``vlref render`` of (b) at 1920x1080x64, four shadowed lights: wall and stage split),
 then in itself (medians after a warm-up call): the scene colour of (b) at 1080p (5 calls) and the march of (a) and
 (b) as the bench's ``march`` section times it (``physical.render`` of a prepared frame, 3 calls each), and SHA-256
-digests of the scene colour and of (a)'s and (b)'s march buffers, which must agree between the trees. A tree that
-has ``vlref.pages`` also times the march with the outputs from ``np.empty`` (``plain``) alternated with its own
-(``faulted``), three rounds.
+digests of the scene colour and of (a)'s and (b)'s march buffers, which must agree between the trees. (Commit
+451351f's version also timed the march with its outputs faulted in on threads, a change measured and reverted.)
 """
 
 import json
@@ -43,22 +42,6 @@ for name, (scene, frame) in frames.items():
     out[f"march_{name}_s"] = median(lambda: physical.render(scene, frame), 3)
     res = physical.render(scene, frame)
     out[f"march_{name}_digest"] = digest(*(res[k] for k in sorted(res)))
-try:
-    import vlref.pages
-except ImportError:
-    pass
-else:
-    faulted = physical.empty_faulted
-    plain = lambda shape, dtype=np.float64: np.empty(shape, dtype)
-    for name, (scene, frame) in frames.items():
-        runs = {"plain": [], "faulted": []}
-        for _ in range(3):
-            for label, fn in (("plain", plain), ("faulted", faulted)):
-                physical.empty_faulted = fn
-                runs[label].append(median(lambda: physical.render(scene, frame), 3))
-        physical.empty_faulted = faulted
-        out[f"march_{name}_plain_s"] = runs["plain"]
-        out[f"march_{name}_faulted_s"] = runs["faulted"]
 print(json.dumps(out))
 """
 

@@ -31,7 +31,6 @@ from numba import njit, prange
 
 from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..numeric import cast
-from ..pages import empty_faulted
 from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
@@ -174,7 +173,7 @@ def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj
 def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     """(H, W, 3) float64 lit surfaces (module docstring)."""
     lights = packed.astype(np.float64)
-    out = empty_faulted(gbuffer.normal.shape)  # rows taken one at a time: all threads in a few new pages (vlref.pages)
+    out = np.empty(gbuffer.normal.shape)
     strength = np.array([li.shadows.strength if li.shadows is not None and li.shadows.enabled else 0.0
                          for li in scene.lights], dtype=np.float64)
     args = (geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,

@@ -21,7 +21,6 @@ import numpy as np
 from ..march.patterns import offsets
 from ..march.physical import TILE_H, march_physical
 from ..medium import pack_medium
-from ..pages import empty_faulted
 from ..post.composite import composite_physical, sum_lights
 from ..progress import bands_for, row_bands
 from ..scene.technique_params import resolved
@@ -48,9 +47,8 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     beta = offsets(sampling, w, h, scene.render.seed).astype(dtype, copy=False)
     medium = pack_medium(scene, dtype)
     packed = lights.astype(dtype)
-    # the march writes every element; its bands would fault the new pages on all threads at once (vlref.pages)
-    per_light = empty_faulted((packed.count, h, w, 3), dtype)
-    trans = empty_faulted((h, w), dtype)
+    per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
+    trans = np.empty((h, w), dtype=dtype)
     # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), each written in
     # place (the march takes the whole arrays and the band's rows) and made of whole tiles of the march (a band
     # ending inside a tile left a strip of one-row tiles: packets of 8 lanes). Pixels are independent, so the
