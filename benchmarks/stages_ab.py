@@ -3,8 +3,8 @@ colour's shadow rays inlined").
 
     python3 benchmarks/stages_ab.py OUT.json LABEL=TREE [LABEL=TREE ...]
 
-Each tree gets its own ``NUMBA_CACHE_DIR``, filled by one cold process per tree (all at once: ``vlref render``'s
-path of (b) at 320x180). Then the trees in order and in reverse (A, B, B, A), each process running the bench's
+Each tree gets its own ``NUMBA_CACHE_DIR``, filled by one cold process per tree (all at once), as
+``frame_stages_ab.py`` does (its ``COLD``: ``vlref render``'s path of (b) at 320x180, the maps of cage and window). Then the trees in order and in reverse (A, B, B, A), each process running the bench's
 ``whole_render`` (a fresh ``vlref render`` of (b) at 1920x1080x64, four shadowed lights: wall and stage split),
 then in itself (medians after a warm-up call): the scene colour of (b) at 1080p (5 calls) and the march of (a) and
 (b) as the bench's ``march`` section times it (``physical.render`` of a prepared frame, 3 calls each), and SHA-256
@@ -13,9 +13,10 @@ digests of the scene colour and of (a)'s and (b)'s march buffers, which must agr
 """
 
 import json
-import os
 import subprocess
 import sys
+
+from frame_stages_ab import COLD, _env  # benchmarks/ is the script's folder: its caches and cold process
 
 CHILD = """
 import hashlib, json, time
@@ -45,39 +46,25 @@ for name, (scene, frame) in frames.items():
 print(json.dumps(out))
 """
 
-COLD = """
-import tempfile
-from vlref.bench.config import bench_scene
-from vlref.cli.render import render_to_folder
-with tempfile.TemporaryDirectory() as folder:
-    render_to_folder(bench_scene(320, 180, 64, "four", 1024), folder + "/out")
-"""
-
-
-def _env(tree: str, label: str) -> dict:
-    return dict(os.environ, PYTHONPATH=os.path.abspath(tree) + os.pathsep + os.environ.get("PYTHONPATH", ""),
-                NUMBA_CACHE_DIR=f"/tmp/nc-stages-{label}")
-
-
-def _median(values):
-    values = sorted(values)
-    return values[len(values) // 2]
+def _measure(tree: str, label: str) -> dict:
+    """One process of ``tree`` running ``CHILD``: its figures."""
+    proc = subprocess.run([sys.executable, "-c", CHILD], cwd=tree, env=_env(tree, label), capture_output=True,
+                          text=True)
+    if proc.returncode:
+        raise SystemExit(f"{label}: {proc.stderr[-3000:]}")
+    figures = json.loads(proc.stdout.strip().splitlines()[-1])
+    print(label, json.dumps(figures), flush=True)
+    return figures
 
 
 def main(out: str, trees: dict) -> None:
-    cold = {label: subprocess.Popen([sys.executable, "-c", COLD], cwd=tree, env=_env(tree, label),
-                                    stdout=subprocess.DEVNULL) for label, tree in trees.items()}
-    for label, proc in cold.items():
-        if proc.wait():
-            raise SystemExit(f"cold render of {label} failed")
+    cold = [subprocess.Popen([sys.executable, "-c", COLD], cwd=tree, env=_env(tree, label), stdout=subprocess.DEVNULL)
+            for label, tree in trees.items()]
+    if any(proc.wait() for proc in cold):
+        raise SystemExit("a cold render failed")
     results = {label: [] for label in trees}
     for label in list(trees) + list(trees)[::-1]:
-        proc = subprocess.run([sys.executable, "-c", CHILD], cwd=trees[label], env=_env(trees[label], label),
-                              capture_output=True, text=True)
-        if proc.returncode:
-            raise SystemExit(f"{label}: {proc.stderr[-3000:]}")
-        results[label].append(json.loads(proc.stdout.strip().splitlines()[-1]))
-        print(label, json.dumps(results[label][-1]), flush=True)
+        results[label].append(_measure(trees[label], label))
         with open(out, "w") as f:
             json.dump(results, f, indent=1)
     for key in ("colour_digest", "march_a_digest", "march_b_digest"):
