@@ -12,10 +12,13 @@ from vlref.lights.attenuation import (ATTENUATION_CODES, INVERSE_SQUARE, MIN_DIS
 from vlref.lights.cone import CONE_CODES, CONE_LINEAR, CONE_SMOOTHSTEP, CONE_UNITY, cone_falloff, default_inner_angle
 from vlref.lights.cookies import load_cookie, sample_texture, spot_cookie_uv
 from vlref.lights.pack import F_COS_INNER, F_COS_OUTER, F_CR, F_UNITY_A, F_UNITY_B, I_ATT, I_CONE
-from vlref.lights.shading import light_incidence
+from vlref.geometry import shadow_transmittance
+from vlref.geometry.obj import write_obj
+from vlref.lights.shading import SURFACE_OFFSET, light_incidence
+from vlref.lights.shadow_lookup import apply_strength
 from vlref.render import prepare_frame
-from vlref.scene.model import (ATTENUATIONS, CONE_LAWS, Box, CameraSettings, Cookie, Light, Material, Plane,
-                               RenderSettings, Scene, ShadowSettings)
+from vlref.scene.model import (ATTENUATIONS, CONE_LAWS, Box, CameraSettings, Cookie, Cylinder, Light, Material,
+                               Mesh, Plane, RenderSettings, Scene, ShadowSettings, Sphere)
 
 NO_LUT = np.zeros((0, 0))
 R = 10.0
@@ -219,3 +222,57 @@ def test_a_light_without_shadows_lights_surfaces_as_unoccluded_lambert(shadows):
     under_box = ground & np.all(np.isclose(shadowed, albedo * ambient, rtol=1e-12), axis=2)
     assert under_box.sum() > 20                                   # the sun with shadows leaves these at ambient
     np.testing.assert_allclose(got[ground], want, rtol=1e-12)     # without, every ground pixel is lit
+
+
+def test_scene_colour_is_the_sum_over_lights_of_the_shadow_rays_pixel_by_pixel(tmp_path):
+    """The scene colour kernel (its shadow query compiled into the pixel loop) gives, bit for bit, the module's
+    formula evaluated pixel by pixel with the separately compiled shadow query: lights in order, each
+    ``E · cos · V`` with ``V`` the RGB shadow ray through transparent primitives and a transparent mesh (the
+    tree of opaque primitives, the linear list and the triangle tree), partial strength, sky pixels."""
+    write_obj(tmp_path / "tet.obj", np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]),
+              np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    glass = Material(opacity=0.4, tint=(1.0, 0.6, 0.3))
+    lights = (Light(type="point", position=(0.5, 4.0, 0.0), intensity=40.0, range=20.0,
+                    shadows=ShadowSettings(strength=0.7)),
+              Light(type="spot", position=(-2.0, 5.0, -1.0), direction=(0.4, -1.0, 0.3), spot_angle=70.0,
+                    intensity=60.0, range=25.0, shadows=ShadowSettings()),
+              Light(type="directional", direction=(0.3, -1.0, 0.4), intensity=1.5, shadows=ShadowSettings()),
+              Light(type="point", position=(2.0, 1.0, -2.0), intensity=5.0, range=10.0))
+    objects = (Plane(), Box(center=(0.0, 1.5, 0.0), size=(1.0, 0.2, 1.0)),
+               Sphere(center=(1.5, 1.0, 0.5), radius=0.6, material=glass),
+               Cylinder(center=(-1.5, 1.0, 0.5), radius=0.3, height=2.0),
+               Mesh(path=str(tmp_path / "tet.obj"), position=(-0.5, 2.5, -0.5), material=glass))
+    scene = Scene(render=RenderSettings(width=48, height=32, ambient=(0.05, 0.04, 0.03), sky_color=(0.1, 0.2, 0.3)),
+                  camera=CameraSettings(position=(0.0, 4.0, -7.0), look_at=(0.0, 0.5, 0.5)), lights=lights,
+                  objects=objects)
+    frame = prepare_frame(scene)
+    g, geo, packed = frame.gbuffer, frame.geometry.arrays, frame.lights.astype(np.float64)
+    strength = [li.shadows.strength if li.shadows is not None else 0.0 for li in lights]
+    want = np.empty_like(frame.scene_colour)
+    lit = shadowed = tinted = 0
+    for y, j in np.ndindex(g.object_id.shape):
+        obj = g.object_id[y, j]
+        if obj < 0:
+            want[y, j] = scene.render.sky_color
+            continue
+        x, yy, z = ((g.origin[c] + g.distance[y, j] * g.directions[y, j, c]) + SURFACE_OFFSET * g.normal[y, j, c]
+                    for c in range(3))
+        s = [0.0, 0.0, 0.0]
+        for k in range(len(lights)):
+            lx, ly, lz, dist, *e = light_incidence(packed, k, x, yy, z)
+            cos_n = g.normal[y, j, 0] * lx + g.normal[y, j, 1] * ly + g.normal[y, j, 2] * lz
+            if cos_n <= 0.0 or e[0] + e[1] + e[2] == 0.0:
+                continue
+            v = (1.0, 1.0, 1.0)
+            if strength[k] > 0.0:
+                v = shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist)
+                shadowed += v != (1.0, 1.0, 1.0)
+                tinted += 0.0 < v[2] < v[0] < 1.0
+                if strength[k] < 1.0:
+                    v = apply_strength(strength[k], *v)
+            lit += 1
+            s = [s[c] + e[c] * cos_n * v[c] for c in range(3)]
+        want[y, j] = [g.object_albedo[obj, c] * (s[c] * (1.0 / math.pi) + scene.render.ambient[c])
+                      + g.object_emission[obj, c] for c in range(3)]
+    assert lit > 2000 and shadowed > 150 and tinted > 20 and np.any(g.object_id < 0)
+    assert want.tobytes() == frame.scene_colour.tobytes()

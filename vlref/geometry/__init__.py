@@ -12,8 +12,9 @@ from .bvh import Bvh, build_bvh, traversal_stack
 from .obj import load_obj, transform_vertices, write_obj
 from .raycast import GBuffer, raycast
 from .scene_geometry import (EVERY_SURFACE, OPAQUE_ONLY, RAY_CHUNK, SHADOW_EPS, GeoArrays, Geometry, build_geometry,
-                             closest_hit, closest_hits, shadow_transmittance, trace_distances)
+                             closest_hit, closest_hits, inline_shadow_transmittance, shadow_transmittance,
+                             trace_distances)
 
 __all__ = ["Bvh", "build_bvh", "traversal_stack", "RAY_CHUNK", "load_obj", "transform_vertices", "write_obj",
            "GBuffer", "raycast", "SHADOW_EPS", "GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits",
-           "shadow_transmittance", "trace_distances", "OPAQUE_ONLY", "EVERY_SURFACE"]
+           "shadow_transmittance", "inline_shadow_transmittance", "trace_distances", "OPAQUE_ONLY", "EVERY_SURFACE"]

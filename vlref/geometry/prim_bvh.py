@@ -84,7 +84,7 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
     return best, best_k, nx, ny, nz
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, forceinline=True)
 def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, stack=None):
     """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``
     (any-hit traversal, early exit; ``stack`` as :func:`prims_closest`'s)."""

@@ -28,9 +28,9 @@ Queries (``t`` in units of ``|d|``; intervals are open):
 
 * :func:`closest_hit` -- nearest surface; the normal faces the ray origin.
 * :func:`shadow_transmittance` -- visibility of a light along a shadow ray, coloured by
-  transparent occluders. Every surface *crossing* counts: a ray through a closed transparent
-  solid (sphere, box, cylinder, closed mesh) is attenuated twice, once entering and once leaving,
-  as a pane of glass per surface.
+  transparent occluders (:func:`inline_shadow_transmittance`: the same, compiled into the caller). Every
+  surface *crossing* counts: a ray through a closed transparent solid (sphere, box, cylinder, closed mesh) is
+  attenuated twice, once entering and once leaving, as a pane of glass per surface.
 * :func:`closest_hits` -- a row or chunk of rays in one call (the G-buffer and shadow-map kernels);
   :func:`trace_distances` -- many rays at once, parallel over chunks of rays.
 
@@ -64,7 +64,8 @@ from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_
                          pack_plane, pack_sphere, triangle_normal)
 
 __all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance",
-           "trace_distances", "SHADOW_EPS", "RAY_CHUNK", "OPAQUE_ONLY", "EVERY_SURFACE"]
+           "inline_shadow_transmittance", "trace_distances", "SHADOW_EPS", "RAY_CHUNK", "OPAQUE_ONLY",
+           "EVERY_SURFACE"]
 
 SHADOW_EPS = 1e-6
 """Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
@@ -263,15 +264,26 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack=None):
 
     0 when an opaque surface (``opacity == 1``) lies on it (any-hit early exit), else
     ``prod (1 - opacity_k) * tint_k`` over the transparent surface crossings ``k`` (module docstring).
-    ``stack`` as :func:`closest_hit`'s.
+    ``stack`` as :func:`closest_hit`'s. A kernel that traces a shadow ray per pixel calls
+    :func:`inline_shadow_transmittance` instead (the same bits).
     """
+    if stack is None:
+        stack = traversal_stack()
+    return inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack)
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack):
+    """:func:`shadow_transmittance` compiled into its caller's loop, with the any-hit traversal of the primitives'
+    tree: a call passes the geo tuple's ~25 arrays and returns through memory, which cost the scene colour's
+    shadow rays of the bench scene ~8x their time (one thread: 118 → 15 ms at 480x270, four lights; BENCHMARKS.md
+    "The scene colour's shadow rays inlined"). For kernels whose pixel loop traces them (the scene colour); the
+    other callers keep one compiled copy (:func:`shadow_transmittance`)."""
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm == 0.0:
         return 1.0, 1.0, 1.0
     tmin = SHADOW_EPS / norm
     ray = (ox, oy, oz, dx, dy, dz)
-    if stack is None:
-        stack = traversal_stack()
     if prims_occluded(geo.pnode_min, geo.pnode_max, geo.pnode_first, geo.pnode_count, geo.pnode_prims,
                       geo.prim_kind, geo.prim_row, ray, tmin, tmax, stack):
         return 0.0, 0.0, 0.0

@@ -11,9 +11,10 @@ It returns the unit vector ``l`` from ``x`` toward the light (``-direction`` for
 and the distance to the light (``inf`` for a directional light).
 
 :func:`scene_colour` shades each G-buffer pixel:
-``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with ``V_l = 1 − strength·(1 − tr)``,
-``tr`` an exact RGB shadow ray (:func:`vlref.geometry.shadow_transmittance`, from the point pushed
-``SURFACE_OFFSET`` along the normal) and ``strength`` the light's ``shadows.strength``
+``albedo/π · Σ_l E_l · max(0, n·l) · V_l + ambient · albedo + emission`` with
+``V_l = 1 − strength·(1 − tr)``, ``tr`` an exact RGB shadow ray (:func:`vlref.geometry.shadow_transmittance`,
+compiled into the pixel loop: its ``inline_`` form) from the point pushed ``SURFACE_OFFSET`` along the normal, and
+``strength`` the light's ``shadows.strength``
 (:func:`vlref.lights.shadow_lookup.apply_strength`: the ``V`` of docs/PHYSICS.md "The integral", which the march
 applies in the medium, and a GPU port's lighting pass on its surfaces). A light whose shadows are absent or
 disabled casts none, on surfaces as in the medium (the marches' ``SHADOW_NONE``, the reference's unshadowed
@@ -28,7 +29,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from ..geometry import shadow_transmittance, traversal_stack
+from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..numeric import cast
 from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from .attenuation import distance_attenuation
@@ -145,7 +146,7 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
                     continue
                 vr, vg, vb = 1.0, 1.0, 1.0
                 if strength[k] > 0.0:   # strength 0: no shadow (shadows absent, disabled or of no strength)
-                    vr, vg, vb = shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist, stack)
+                    vr, vg, vb = inline_shadow_transmittance(geo, x, yy, z, lx, ly, lz, dist, stack)
                     if strength[k] < 1.0:   # 1 - 1·(1 - tr) can round off tr: strength 1 keeps tr as it is
                         vr, vg, vb = apply_strength(strength[k], vr, vg, vb)
                 sr += er * cos_n * vr
