@@ -144,7 +144,8 @@ def main() -> None:
     report = run_bench(FULL, ["inbench_raycast"], log, sections)
     probe("end")
     mine = {k: report[k] for k in ("raycast", "shadow_maps") if k in report}
-    print(json.dumps({"label": args.label, "bench": mine, "machine": report["machine"]}), flush=True)
+    print(json.dumps({"label": args.label, "bench": mine, "machine": report["machine"],
+                      "threading_layer": numba.threading_layer()}), flush=True)
 
 
 if __name__ == "__main__":
