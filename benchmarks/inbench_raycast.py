@@ -37,7 +37,7 @@ from vlref.bench.config import FULL, bench_scene  # noqa: E402
 from vlref.bench.report import run_bench  # noqa: E402
 from vlref.camera import camera_from_settings  # noqa: E402
 from vlref.geometry import build_geometry, raycast  # noqa: E402
-from vlref.geometry.raycast import _cast_rows, _raycast_kernel  # noqa: E402
+from vlref.geometry.raycast import _cast_rows, _raycast_kernel, kernel_args  # noqa: E402
 from vlref.parallel import COUNTER, work  # noqa: E402
 
 gc.freeze()
@@ -111,9 +111,7 @@ class Probe:
         self.ceiling_out = np.empty(ITEMS)
 
     def kernel(self):
-        g = raycast(self.scene, self.camera, self.geometry)
-        args = (self.geometry.arrays, g.origin, g.directions, np.ascontiguousarray(self.camera.forward, dtype=float),
-                float(self.camera.far), g.depth, g.distance, g.normal, g.object_id)
+        args = kernel_args(self.geometry.arrays, self.camera, raycast(self.scene, self.camera, self.geometry))
         cast = work(_cast_rows, COUNTER, *args)
         return lambda: _raycast_kernel(*args, cast)
 
