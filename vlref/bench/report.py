@@ -105,9 +105,10 @@ def run_bench(cfg: BenchConfig, argv: list[str] = (), log=None, sections=None) -
     wanted = set(SECTIONS if sections is None else sections)
     unknown = wanted - set(SECTIONS)
     if unknown:
-        raise InputError(f"sections: unknown {', '.join(sorted(unknown))} (known: {', '.join(SECTIONS)})")
+        raise InputError("<command line>", "sections", f"unknown {', '.join(sorted(unknown))} (known: "
+                         f"{', '.join(SECTIONS)})")
     if "baseline" in wanted and not {"march", "scaling"} <= wanted:
-        raise InputError("sections: baseline needs march and scaling")
+        raise InputError("<command line>", "sections", "baseline needs march and scaling")
     r = {"machine": machine_info(list(argv)), "config": dataclasses.asdict(cfg)}
     steps = (("march", lambda: bench_march(cfg)), ("scaling", lambda: bench_scaling(cfg)),
              (("raycast", "shadow_maps"), lambda: bench_geometry(cfg)), ("post", lambda: bench_post(cfg)),
