@@ -45,7 +45,7 @@ FULL = BenchConfig()
 QUICK = BenchConfig(width=48, height=27, steps=8, repeats=1, small=(32, 18), baseline=(16, 9), preview=(32, 18, 4),
                     reference=(4, 3),
                     first_render=(16, 9), memory_steps=2, bundled=(), shadow_resolution=64, cold_cache=False,
-                    ceiling_steps=4, min_seconds=0.0)
+                    ceiling_steps=4, min_seconds=0.01)
 
 
 def bench_scene(width: int, height: int, steps: int, lights: str = "one", shadow_resolution: int = 1024,
