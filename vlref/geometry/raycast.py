@@ -153,7 +153,6 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
     ox, oy, oz = origin[0], origin[1], origin[2]
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
     t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
-    origins, cos_f, tmax, t_row, obj_row, n_row = borrowed((origins, cos_f, tmax, t_row, obj_row, n_row))
     stack = traversal_stack()
     for x in range(w):
         origins[x, 0], origins[x, 1], origins[x, 2] = ox, oy, oz
