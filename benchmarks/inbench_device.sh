@@ -1,5 +1,5 @@
-# The ray cast inside the bench's process, on the device (BENCHMARKS.md, "The ray cast inside the bench's process"):
-# run in the tree, after the wheels are installed and PYTHONPATH, NUMBA_CACHE_DIR's parent and $OUT are set.
+# The ray cast inside the bench's process, on the device (BENCHMARKS.md, "The camera ray cast inside the bench's
+# process, and twice as fast"): run in the tree, after the wheels are installed and PYTHONPATH and $OUT are set.
 # One process with a fresh Numba cache (as a full `vlref bench` runs), then three with the cache it filled.
 SP=$(python3 -c "import numpy, os; print(os.path.dirname(os.path.dirname(numpy.__file__)))")
 STD=$(python3 -c "import sysconfig; print(sysconfig.get_paths()['stdlib'])")

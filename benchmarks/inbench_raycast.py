@@ -1,5 +1,5 @@
 """The camera ray cast inside ``vlref bench``'s process: the bench's own sections, in its order, with a probe before
-each (BENCHMARKS.md, "The ray cast inside the bench's process").
+each (BENCHMARKS.md, "The camera ray cast inside the bench's process, and twice as fast").
 
     python3 benchmarks/inbench_raycast.py LABEL [--sections march,scaling,raycast] [--probe each|raycast]
 

@@ -83,9 +83,9 @@ def median_time(fn, repeats: int, clock=time.perf_counter, min_seconds: float = 
     ``time.process_time`` gives CPU time); more calls, up to ``max_repeats``, until the timed calls add up to
     ``min_seconds``.
 
-    A call of a few milliseconds on 16 cores varies by 1.5-2x from call to call on the device (a core that starts
-    late, another process's burst; BENCHMARKS.md "The ray cast inside the bench's process"), so the median of three
-    such calls is one slow call away from a slow figure: the bench's short figures take ``min_seconds``."""
+    A call of a few milliseconds on 16 cores varies by 1.5-2x from call to call on the device (BENCHMARKS.md "The
+    camera ray cast inside the bench's process, and twice as fast"), so the median of three such calls is one slow
+    call away from a slow figure: the bench's short figures take ``min_seconds``."""
     fn()
     times = []
     while len(times) < repeats or (sum(times) < min_seconds and len(times) < max_repeats):
