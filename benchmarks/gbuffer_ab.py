@@ -50,6 +50,9 @@ stored = ((g.depth, g.distance, g.normal, g.object_id) if hasattr(g, "origin") e
 dirs = np.ascontiguousarray(camera.ray_directions(copy=False))
 origin = np.ascontiguousarray(camera.position, dtype=np.float64)
 kernel_args = (geometry.arrays, origin, dirs, forward, float(camera.far), *stored)
+if "spans" in inspect.signature(_raycast_kernel.py_func).parameters:  # rays left out of the primitive tree
+    from vlref.geometry.raycast import kernel_args as cast_args
+    kernel_args = cast_args(geometry.arrays, camera, g)
 if "cast_rows" in inspect.signature(_raycast_kernel.py_func).parameters:  # the kernel takes its work by address
     from vlref.geometry.raycast import _cast_rows
     from vlref.parallel import COUNTER, work

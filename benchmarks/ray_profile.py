@@ -19,7 +19,7 @@ from numba import njit, prange
 from vlref.bench.config import bench_scene
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry, closest_hits, raycast, traversal_stack
-from vlref.geometry.raycast import GBuffer, _cast_rows, _raycast_kernel
+from vlref.geometry.raycast import GBuffer, _cast_rows, _raycast_kernel, kernel_args
 from vlref.lights import pack_lights
 from vlref.lights.shadow_cast import build_shadow_maps
 from vlref.parallel import COUNTER, work
@@ -63,11 +63,10 @@ def main(width=480, height=270, res=512):
     buf = GBuffer(depth=np.empty((height, width)), distance=np.empty((height, width)),
                   normal=np.zeros((height, width, 3)), object_id=np.empty((height, width), dtype=np.int32),
                   origin=origin, directions=dirs, object_albedo=geo.albedo, object_emission=geo.emission)
-    kernel_args = (geo, origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far),
-                   buf.depth, buf.distance, buf.normal, buf.object_id)
+    args = kernel_args(geo, camera, buf)
     rows = {
         "raycast (buffers allocated)": lambda: raycast(scene, camera, geometry),
-        "raycast kernel (buffers reused)": lambda: _raycast_kernel(*kernel_args, work(_cast_rows, COUNTER, *kernel_args)),
+        "raycast kernel (buffers reused)": lambda: _raycast_kernel(*args, work(_cast_rows, COUNTER, *args)),
         "closest_hits only": lambda: _hits_only(geo, origin, dirs, tmax),
     }
     print(f"bench scene (b) {width}x{height}, {n} rays; ns per ray: wall / CPU")

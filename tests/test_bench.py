@@ -1,14 +1,21 @@
 """`vlref bench --quick --json`: every section present, every figure finite and the timings/rates positive,
-the NumPy baseline equal to the march kernel, and the primitive BVH equal to a linear scan. No timing asserts."""
+the NumPy baseline equal to the march kernel, and the primitive BVH equal to a linear scan; `run_bench` of some
+sections, the timer's repeats. No timing asserts."""
 
 import json
 import math
+import multiprocessing
+import threading
 
+import numba
 import numpy as np
 import pytest
 
-from vlref.bench import SECTIONS
+from vlref.bench import QUICK, SECTIONS, run_bench
+from vlref.bench.ceiling import bench_ceiling
+from vlref.bench.config import median_time
 from vlref.cli import main
+from vlref.errors import InputError
 from vlref.geometry import build_geometry, closest_hit, shadow_transmittance
 from vlref.scene.model import Box, Cylinder, Light, Material, Plane, Scene, Sphere
 
@@ -71,6 +78,45 @@ def test_the_machine_ceiling_kernels_compute_their_chains():
     for _ in range(7):
         x = np.exp(-x) + 0.5
     np.testing.assert_allclose(out, x.sum(axis=1), rtol=1e-14)
+
+
+def test_median_time_runs_until_the_calls_add_up_to_min_seconds():
+    now, calls = [0.0], []
+
+    def call():  # takes 0.25 s by the fake clock
+        calls.append(now[0])
+        now[0] += 0.25
+
+    assert median_time(call, 3, clock=lambda: now[0], min_seconds=1.0) == 0.25
+    assert len(calls) == 1 + 4  # the warm-up, then calls until they add up to 1 s
+    calls.clear()
+    median_time(call, 3, clock=lambda: now[0], min_seconds=100.0, max_repeats=20)
+    assert len(calls) == 1 + 20
+    calls.clear()
+    median_time(call, 3, clock=lambda: now[0])
+    assert len(calls) == 1 + 3
+
+
+def test_run_bench_runs_the_sections_named_and_leaves_nothing_behind():
+    """Only the sections named, in the bench's order; the Numba thread count the caller set is the one after
+    the scaling kernels' cycle; no Python thread or child process outlives a section."""
+    logged, threads = [], threading.active_count()
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        r = run_bench(QUICK, [], lambda message, partial: logged.append(message), sections=["shadow_maps", "raycast"])
+        bench_ceiling(QUICK)
+        assert numba.get_num_threads() == 1
+    finally:
+        numba.set_num_threads(before)
+    assert logged == ["raycast, shadow_maps"]
+    assert set(r) == {"machine", "config", "raycast", "shadow_maps"}
+    assert r["raycast"]["bench_four_lights"]["rays_per_s"] > 0
+    assert threading.active_count() == threads and multiprocessing.active_children() == []
+    with pytest.raises(InputError, match="unknown nope"):
+        run_bench(QUICK, sections=["nope"])
+    with pytest.raises(InputError, match="baseline needs march and scaling"):
+        run_bench(QUICK, sections=["baseline", "march"])
 
 
 def test_numpy_baseline_is_the_same_computation(report):

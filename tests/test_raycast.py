@@ -1,5 +1,6 @@
 """G-buffer ray casting: analytic depth of a plane/sphere scene, far-plane cut, transparency,
-meshes against the equivalent analytic box, and bit-identical results for 1 and 2 threads."""
+meshes against the equivalent analytic box, bit-identical results for 1 and 2 threads, and the rays left out of
+the primitive tree (those that cannot cross its root box) giving the same bits as every ray through it."""
 
 from pathlib import Path
 
@@ -7,10 +8,13 @@ import numba
 import numpy as np
 import pytest
 
+from vlref.bench.config import bench_scene
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry, raycast
+from vlref.geometry.raycast import GBuffer, _cast_rows, _raycast_kernel, kernel_args, tree_spans
 from vlref.geometry.meshgen import box_mesh
 from vlref.geometry.obj import write_obj
+from vlref.parallel import COUNTER, work
 from vlref.scene.model import Box, CameraSettings, Cylinder, Light, Material, Mesh, Plane, Scene, Sphere
 
 DATA = Path(__file__).resolve().parents[1] / "data" / "scenes"
@@ -132,3 +136,60 @@ def test_same_bits_for_one_and_two_threads():
     for name in ("depth", "distance", "position", "normal", "albedo", "emission", "object_id"):
         a, b = getattr(one, name), getattr(two, name)
         assert a.tobytes() == b.tobytes(), name
+
+
+def _cameras(seed, count):
+    """Cameras around, above and inside the bench scene's objects, looking every way (``count`` of them)."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        position = rng.uniform((-6.0, 0.2, -9.0), (6.0, 5.0, 6.0))
+        look_at = position + rng.normal(size=3)
+        yield CameraSettings(position=tuple(position), look_at=tuple(look_at), fov=float(rng.uniform(20.0, 100.0)))
+
+
+def _crosses_root_box(geo, origin, dirs):
+    """(H, W) bool: the ray from ``origin`` along each of ``dirs`` crosses the primitive tree's root box at some
+    ``t >= 0`` (slab test in NumPy, exact but for rounding)."""
+    lo, hi = geo.pnode_min[0] - origin, geo.pnode_max[0] - origin
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t0, t1 = lo / dirs, hi / dirs
+    near = np.where(dirs == 0.0, np.where((lo <= 0.0) & (hi >= 0.0), -np.inf, np.inf), np.minimum(t0, t1))
+    far = np.where(dirs == 0.0, np.where((lo <= 0.0) & (hi >= 0.0), np.inf, -np.inf), np.maximum(t0, t1))
+    return np.maximum(near.max(axis=-1), 0.0) <= far.min(axis=-1)
+
+
+def test_tree_spans_hold_every_ray_that_crosses_the_primitive_tree():
+    scene = bench_scene(96, 54, 8, "four", 64)
+    geo = build_geometry(scene).arrays
+    culled = []
+    for settings in (scene.camera, *_cameras(1, 40)):
+        cam = camera_from_settings(settings, 96, 54)
+        dirs = cam.ray_directions()
+        spans = tree_spans(geo, cam.position, dirs)
+        inside = np.zeros(dirs.shape[:2], dtype=bool)
+        for y, (x0, x1) in enumerate(spans):
+            inside[y, x0:x1] = True
+        crossing = _crosses_root_box(geo, cam.position, dirs)
+        assert not np.any(crossing & ~inside)
+        culled.append(1.0 - inside.mean())
+    assert culled[0] > 0.8  # the bench view: the objects cover a tenth of the frame's rays
+    assert max(culled[1:]) > 0.5 and min(culled[1:]) == 0.0  # views of them from afar, and from among them
+
+
+def test_rays_left_out_of_the_primitive_tree_give_the_same_bits():
+    scene = bench_scene(64, 36, 8, "four", 64)
+    geometry = build_geometry(scene)
+    geo = geometry.arrays
+    for settings in (scene.camera, *_cameras(2, 12)):
+        cam = camera_from_settings(settings, 64, 36)
+        culled = raycast(scene, cam, geometry)
+        every = GBuffer(**{name: np.empty_like(getattr(culled, name)) for name in ("depth", "distance", "normal",
+                                                                                    "object_id")},
+                        origin=culled.origin, directions=culled.directions, object_albedo=geo.albedo,
+                        object_emission=geo.emission)
+        every.normal[...] = 0.0
+        args = list(kernel_args(geo, cam, every))
+        args[2] = np.tile(np.array([0, 64], dtype=np.int64), (36, 1))  # every ray through the tree
+        _raycast_kernel(*args, work(_cast_rows, COUNTER, *args))
+        for name in ("depth", "distance", "normal", "object_id"):
+            assert getattr(culled, name).tobytes() == getattr(every, name).tobytes(), name

@@ -38,8 +38,10 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
 ``targets``       each target of BENCHMARKS.md "Targets", the measured figure, and whether it is met.
 
 Timings are medians of ``repeats`` runs after one warm-up run (JIT compile excluded except in
-``first_render``). Benchmarks report; they never fail on a timing. The core stack (NumPy, Numba,
-SciPy) is all this module needs.
+``first_render``); the ray cast, the shadow maps and the post passes (calls of milliseconds) take more runs, until
+they add up to ``min_seconds`` (:func:`~vlref.bench.config.median_time`). :func:`run_bench` runs every section or
+those named. Benchmarks report; they never fail on a timing. The core stack (NumPy, Numba, SciPy) is all this
+module needs.
 
 Modules, one per group of sections: :mod:`.config` (sizes, scene, timer), :mod:`.march` (``march``,
 ``scaling``, ``baseline``), :mod:`.ceiling` (the machine's own scaling), :mod:`.baseline` (the NumPy baseline), :mod:`.stages` (``raycast``,

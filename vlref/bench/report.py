@@ -12,8 +12,9 @@ import llvmlite.binding as llvm
 import numba
 import numpy as np
 
+from ..errors import InputError
 from ..processes import host_cores
-from .config import BenchConfig
+from .config import SECTIONS, BenchConfig
 from .march import bench_baseline, bench_march, bench_scaling
 from .renders import bench_first_render, bench_memory, bench_reference, bench_whole_render
 from .stages import bench_geometry, bench_post
@@ -93,12 +94,21 @@ def machine_info(argv: list[str]) -> dict:
             "command": "vlref bench " + " ".join(argv)}
 
 
-def run_bench(cfg: BenchConfig, argv: list[str] = (), log=None) -> dict:
-    """Every section of the report (module docstring) for the sizes of ``cfg``.
+def run_bench(cfg: BenchConfig, argv: list[str] = (), log=None, sections=None) -> dict:
+    """Every section of the report (module docstring) for the sizes of ``cfg``, or those named in ``sections``
+    (names of :data:`~vlref.bench.config.SECTIONS`; ``raycast`` and ``shadow_maps`` come together, ``baseline``
+    needs ``march`` and ``scaling``, ``targets`` all of them), in the bench's own order.
 
     ``log(message, partial_report)`` is called before each section (cheapest and most-wanted first).
     """
     log = log or (lambda msg, report: None)
+    wanted = set(SECTIONS if sections is None else sections)
+    unknown = wanted - set(SECTIONS)
+    if unknown:
+        raise InputError("<command line>", "sections", f"unknown {', '.join(sorted(unknown))} (known: "
+                         f"{', '.join(SECTIONS)})")
+    if "baseline" in wanted and not {"march", "scaling"} <= wanted:
+        raise InputError("<command line>", "sections", "baseline needs march and scaling")
     r = {"machine": machine_info(list(argv)), "config": dataclasses.asdict(cfg)}
     steps = (("march", lambda: bench_march(cfg)), ("scaling", lambda: bench_scaling(cfg)),
              (("raycast", "shadow_maps"), lambda: bench_geometry(cfg)), ("post", lambda: bench_post(cfg)),
@@ -106,13 +116,16 @@ def run_bench(cfg: BenchConfig, argv: list[str] = (), log=None) -> dict:
              ("baseline", lambda: bench_baseline(cfg, r["march"], r["scaling"])),
              ("first_render", lambda: bench_first_render(cfg)), ("whole_render", lambda: bench_whole_render(cfg)))
     for key, fn in steps:
+        if wanted.isdisjoint((key,) if isinstance(key, str) else key):
+            continue
         log(key if isinstance(key, str) else ", ".join(key), r)
         value = fn()
         if isinstance(key, str):
             r[key] = value
         else:
             r.update(zip(key, value))
-    r["targets"] = targets(cfg, r)
+    if set(SECTIONS) <= wanted:
+        r["targets"] = targets(cfg, r)
     return r
 
 

@@ -30,8 +30,9 @@ def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
         cam = camera_from_settings(scene.camera, scene.render.width, scene.render.height)
         geo = build_geometry(scene)
         packed = pack_lights(scene)
-        rc = median_time(lambda: raycast(scene, cam, geo), cfg.repeats)
-        sm_seconds = median_time(lambda: build_shadow_maps(scene, cam, geo, packed), cfg.repeats)
+        rc = median_time(lambda: raycast(scene, cam, geo), cfg.repeats, min_seconds=cfg.min_seconds)
+        sm_seconds = median_time(lambda: build_shadow_maps(scene, cam, geo, packed), cfg.repeats,
+                                 min_seconds=cfg.min_seconds)
         texels = int(build_shadow_maps(scene, cam, geo, packed).data.size)
         rays = scene.render.width * scene.render.height
         return ({"width": scene.render.width, "height": scene.render.height, "seconds": rc, "rays_per_s": rays / rc},
@@ -68,7 +69,8 @@ def bench_post(cfg: BenchConfig) -> dict:
     """Each post pass at ``cfg.width x cfg.height`` (:func:`post_passes`), and the explorer's preview re-render."""
     h, w = cfg.height, cfg.width
     passes = post_passes(h, w)
-    out = {name: {"seconds": median_time(fn, cfg.repeats), "width": w, "height": h} for name, fn in passes.items()}
+    out = {name: {"seconds": median_time(fn, cfg.repeats, min_seconds=cfg.min_seconds), "width": w, "height": h}
+           for name, fn in passes.items()}
     pw, ph, steps = cfg.preview
     scene = bench_scene(pw, ph, steps, "one", cfg.shadow_resolution, technique="killzone", resolution="half")
     # A slider move re-renders with the frame (geometry, G-buffer, shadow maps) reused, as the explorer

@@ -282,12 +282,13 @@ def enter_root(node_min, node_max, ray, tmin, tmax, stack):
     components replaced by ``1e-300`` first, :func:`ray_box`) and the traversal scratch (``stack``, or a new
     :func:`traversal_stack` when it is None)."""
     ox, oy, oz, dx, dy, dz = ray
-    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
-    root = np.int64(0)  # not the literal 0, nor the int32 of node_first: ray_box compiles once, for int64
-    entered = node_min.shape[0] > 0 and ray_box(node_min, node_max, root, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF
     if stack is None:
         stack = traversal_stack()
-    return entered, ix, iy, iz, stack
+    if node_min.shape[0] == 0:  # an empty tree: no divisions for an inverse direction never used
+        return False, 0.0, 0.0, 0.0, stack
+    ix, iy, iz = _inverse(dx), _inverse(dy), _inverse(dz)
+    root = np.int64(0)  # not the literal 0, nor the int32 of node_first: ray_box compiles once, for int64
+    return ray_box(node_min, node_max, root, ox, oy, oz, ix, iy, iz, tmin, tmax) < INF, ix, iy, iz, stack
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

@@ -18,13 +18,14 @@ origin and ray directions, the objects' materials), with the same operations and
 kernel had written them. A consumer in a kernel computes them in place (:func:`vlref.lights.shading.scene_colour`
 reads ``o + t d`` and the object's albedo and emission: no (H, W, 3) array of them is ever built for shading).
 
-Performance (BENCHMARKS.md, "Ray casting: the query inlined, the arrays borrowed, rows on demand" and "The
-G-buffer's bytes"): rows are handed out to the threads on demand (:func:`vlref.parallel.take`; sky rows cost next
-to nothing, so ``prange``'s equal blocks would leave threads idle), and the workers get every array without
-reference counts (:func:`vlref.parallel.borrowed`). A fresh G-buffer costs the first touch of its new pages (the OS
-zeroes each one), which is why only 44 of the former 116 bytes a pixel are written: at 1080p on 16 cores ``raycast``
-casts ~118 M rays/s, the kernel on buffers allocated once ~137 M (one device machine; another measured 74-80 M for
-``raycast``).
+Performance (BENCHMARKS.md, "Ray casting: the query inlined, the arrays borrowed, rows on demand", "The
+G-buffer's bytes" and "The camera ray cast inside the bench's process, and twice as fast"): rows are handed out to
+the threads on demand (:func:`vlref.parallel.take`; sky rows cost next to nothing, so ``prange``'s equal blocks would
+leave threads idle), and the workers get every array without reference counts (:func:`vlref.parallel.borrowed`).
+All rays start at the camera, so the rays of a row lie in one plane, those of a column in another: the rays whose
+row or column plane passes beside the primitive tree's root box cannot cross any of its primitives and are cast
+without the tree (:func:`tree_spans`; the same bits). A fresh G-buffer costs the first touch of its new pages (the OS
+zeroes each one), which is why only 44 bytes a pixel are written.
 """
 
 from __future__ import annotations
@@ -40,9 +41,9 @@ from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
-from .scene_geometry import OPAQUE_ONLY, Geometry, build_geometry, closest_hits
+from .scene_geometry import OPAQUE_ONLY, GeoArrays, Geometry, build_geometry, closest_hits
 
-__all__ = ["GBuffer", "raycast"]
+__all__ = ["GBuffer", "raycast", "kernel_args", "tree_spans", "without_tree"]
 
 
 @dataclass(frozen=True)
@@ -95,17 +96,60 @@ def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
     return out
 
 
+def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """(H, 2) int64: for each row of the pinhole camera's rays ``dirs`` (H, W, 3) from ``origin``, the columns
+    ``[x0, x1)`` outside which no ray can cross the box of the primitive tree's root (``(0, 0)``: none of the row's).
+
+    A pinhole camera's rays of one row lie in one plane through the origin (their local directions
+    ``(a, b, 1)`` share ``b``: :func:`vlref.camera.pixel_rays`), those of one column in another (they share
+    ``a``); a ray can cross the box only where both its row's and its column's plane do, i.e. where the box's eight
+    corners are not all on one side of each. The planes are taken from the rays themselves (the first and last of
+    each row and column, whose cross product is the plane's normal), and a corner counts as on a side only when it
+    is farther than ``1e-9`` times the box's distance from it: ~10⁶ times more than the rounding of the rays and of
+    the slab test (:func:`~vlref.geometry.bvh.ray_box`), so a ray left out would have missed the box there too
+    (the same bits). Rows or columns too few (one) or too close in direction to span a plane are not culled.
+    """
+    h, w = dirs.shape[0], dirs.shape[1]
+    if geo.pnode_min.shape[0] == 0 or h == 0 or w == 0:
+        return np.zeros((h, 2), dtype=np.int64)
+    lo, hi = geo.pnode_min[0], geo.pnode_max[0]
+    corners = np.stack(np.meshgrid(*zip(lo, hi), indexing="ij"), axis=-1).reshape(8, 3) - origin
+    margin = 1e-9 * (float(np.abs(corners).max()) + 1.0)
+
+    def may_cross(first, last):
+        normal = np.cross(first, last)
+        norm = np.linalg.norm(normal, axis=-1)
+        side = corners @ (normal / np.maximum(norm, 1e-300)[:, None]).T
+        apart = (side > margin).all(axis=0) | (side < -margin).all(axis=0)
+        return ~apart | (norm < 1e-6)
+
+    rows = may_cross(dirs[:, 0], dirs[:, -1]) if w > 1 else np.ones(h, dtype=bool)
+    cols = np.flatnonzero(may_cross(dirs[0], dirs[-1]) if h > 1 else np.ones(w, dtype=bool))
+    spans = np.zeros((h, 2), dtype=np.int64)
+    if cols.size:
+        spans[rows] = (cols[0], cols[-1] + 1)
+    return spans
+
+
+def without_tree(geo: GeoArrays) -> GeoArrays:
+    """``geo`` with an empty primitive tree (its arrays cut to length 0: the same types), for rays that cannot
+    cross the tree's root box (:func:`tree_spans`)."""
+    return geo._replace(pnode_min=geo.pnode_min[:0], pnode_max=geo.pnode_max[:0], pnode_first=geo.pnode_first[:0],
+                        pnode_count=geo.pnode_count[:0], pnode_prims=geo.pnode_prims[:0])
+
+
 @njit(cache=True, fastmath=False)
-def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, object_id):
+def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
-    (:func:`closest_hits`), then its G-buffer pixels written (module docstring). The arrays are borrowed
+    (:func:`closest_hits`; those outside the row's span of :func:`tree_spans` against ``outside``, the geometry
+    without its primitive tree), then its G-buffer pixels written (module docstring). The arrays are borrowed
     (:func:`vlref.parallel.borrowed`)."""
     h, w = depth.shape
     y = take(taken)
     if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
         return
-    geo, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
-        (geo, origin, dirs, forward, depth, distance, normal, object_id))
+    geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
+        (geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id))
     ox, oy, oz = origin[0], origin[1], origin[2]
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
     t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
@@ -116,7 +160,14 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, 
         for x in range(w):  # the ray's end on the far plane
             cos_f[x] = dirs[y, x, 0] * forward[0] + dirs[y, x, 1] * forward[1] + dirs[y, x, 2] * forward[2]
             tmax[x] = far / cos_f[x]
-        closest_hits(geo, origins, dirs[y], tmax, OPAQUE_ONLY, stack, t_row, obj_row, n_row)
+        x0, x1 = spans[y, 0], spans[y, 1]
+        row = dirs[y]
+        closest_hits(outside, origins[:x0], row[:x0], tmax[:x0], OPAQUE_ONLY, stack, t_row[:x0], obj_row[:x0],
+                     n_row[:x0])
+        closest_hits(geo, origins[x0:x1], row[x0:x1], tmax[x0:x1], OPAQUE_ONLY, stack, t_row[x0:x1],
+                     obj_row[x0:x1], n_row[x0:x1])
+        closest_hits(outside, origins[x1:], row[x1:], tmax[x1:], OPAQUE_ONLY, stack, t_row[x1:], obj_row[x1:],
+                     n_row[x1:])
         for x in range(w):  # the surface each ray sees
             t, obj = t_row[x], obj_row[x]
             object_id[y, x] = obj
@@ -131,12 +182,12 @@ def _cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, 
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
+def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
     """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
     :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
     taken = np.zeros(1, dtype=np.int64)
     for _ in prange(WORKERS):
-        cast_rows(taken, geo, origin, dirs, forward, far, depth, distance, normal, object_id)
+        cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
@@ -155,7 +206,15 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                   object_id=np.empty((h, w), dtype=np.int32),
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
-    args = (geo, buf.origin, dirs, np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth,
-            buf.distance, buf.normal, buf.object_id)
+    args = kernel_args(geo, camera, buf)
     _raycast_kernel(*args, work(_cast_rows, COUNTER, *args))
     return buf
+
+
+def kernel_args(geo: GeoArrays, camera: Camera, buf: GBuffer) -> tuple:
+    """The ray-cast kernel's arguments but its work (``_raycast_kernel(*args, work(_cast_rows, COUNTER, *args))``
+    fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the rays, the far plane,
+    the stored buffers."""
+    return (geo, without_tree(geo), tree_spans(geo, buf.origin, buf.directions), buf.origin, buf.directions,
+            np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth, buf.distance,
+            buf.normal, buf.object_id)

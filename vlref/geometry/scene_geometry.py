@@ -42,7 +42,11 @@ call take and drop a reference, an atomic add on a counter that all threads shar
 fields once per row or chunk of rays, borrows them (:func:`vlref.parallel.borrowed`: no counters) and has the
 whole query (:func:`_closest`, the primitive and triangle traversals) inlined into its ray loop, so that the
 compiler sees the borrowed arrays and drops the counting: one thread, 480x270 of the bench scene, 211 → 57 ns
-per camera ray (the inlining alone 159 ns, the borrowing alone nothing).
+per camera ray (the inlining alone 159 ns, the borrowing alone nothing). The traversal stack is borrowed too: the
+inlined traversal passes it on in tuples, and each pass took and dropped a reference (atomic) on every ray, which
+was most of a ray's time where the traversal has little to do (dev box, one thread, 1080p of the bench scene: 32 →
+6 ns per ray with no geometry at all, 36 → 16 ns on the bench scene; BENCHMARKS.md "The camera ray cast inside the
+bench's process, and twice as fast").
 """
 
 from __future__ import annotations
@@ -241,10 +245,10 @@ def closest_hits(geo, origins, dirs, tmax, opaque_only, stack, t_out, obj_out, n
     """:func:`closest_hit` of rays ``i`` (``origins[i]``, ``dirs[i]``, ``t`` in ``(0, tmax[i])``) into ``t_out``,
     ``obj_out`` and ``normal_out`` (N, 3), the same bits ray by ray.
 
-    Kernels call it on a row or chunk of rays with a row or chunk of scratch; the geo arrays are read without
-    reference counts (the caller owns ``geo`` for the call; module docstring, "Performance").
+    Kernels call it on a row or chunk of rays with a row or chunk of scratch; the geo arrays and the traversal
+    stack are read without reference counts (the caller owns them for the call; module docstring, "Performance").
     """
-    geo = borrowed(geo)
+    geo, stack = borrowed((geo, stack))
     lin, kind, row, prim_obj, opacity = geo.lin_prims, geo.prim_kind, geo.prim_row, geo.prim_obj, geo.opacity
     pnode_min, pnode_max, pnode_first = geo.pnode_min, geo.pnode_max, geo.pnode_first
     pnode_count, pnode_prims = geo.pnode_count, geo.pnode_prims
