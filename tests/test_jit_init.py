@@ -85,3 +85,38 @@ def test_with_scipy_linalg_already_imported_numba_initialises_as_usual():
 
 def test_where_the_extension_cannot_be_loaded_alone_numba_initialises_as_usual():
     assert _state(NOT_LOADABLE) == {"have_blas": True, "scipy.linalg": True}
+
+
+OWN_KERNELS = r"""
+import json, sys
+import numba.core.entrypoints
+from vlref.cli.commands import program_command
+render_to_folder = program_command(sys.argv[1]).render_to_folder
+import tempfile
+from vlref.scene import load_scene
+with tempfile.TemporaryDirectory() as folder:
+    render_to_folder(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]), folder + "/out")
+from numba.core.typing import cffi_utils
+state = {"cffi imported": "cffi" in sys.modules, "pycparser imported": "pycparser" in sys.modules,
+         "numba cffi support": cffi_utils.SUPPORTED, "extensions loaded": numba.core.entrypoints._already_initialized}
+import cffi  # a complete import afterwards, whatever Numba's support
+state["cffi works"] = cffi.FFI().sizeof("int") == 4
+print(json.dumps(state))
+"""
+
+
+def test_the_render_programs_process_initialises_numba_without_cffi_and_extensions():
+    # cffi is installed wherever wgpu is (the test extra): it must be, for this to test anything
+    import importlib.util
+    assert importlib.util.find_spec("cffi") is not None, "cffi is a dependency of wgpu, which the test extra installs"
+    program = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS, "render"], capture_output=True,
+                                        text=True, check=True).stdout.strip().splitlines()[-1])
+    assert program == {"cffi imported": False, "pycparser imported": False, "numba cffi support": False,
+                       "extensions loaded": True, "cffi works": True}
+    # another command's process (it may run a user's code or a cluster): Numba as it always initialises
+    other = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS.replace(
+        "program_command(sys.argv[1]).render_to_folder", "program_command(sys.argv[1]) and "
+        "__import__('vlref.cli.render').cli.render.render_to_folder"), "scenes"], capture_output=True, text=True,
+        check=True).stdout.strip().splitlines()[-1])
+    assert other == {"cffi imported": True, "pycparser imported": True, "numba cffi support": True,
+                     "extensions loaded": True, "cffi works": True}

@@ -21,11 +21,12 @@ import sys
 import threading
 
 from .. import __version__
+from ..jit_init import own_kernels_only
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
-__all__ = ["COMMANDS", "EXIT_AT_ONCE", "command", "program_command", "build_parser", "main", "exit_at_once",
-           "Interrupted"]
+__all__ = ["COMMANDS", "EXIT_AT_ONCE", "OWN_KERNELS_ONLY", "command", "program_command", "build_parser", "main",
+           "exit_at_once", "Interrupted"]
 
 COMMANDS = {
     # name: (module of vlref.cli, prefix of its error messages)
@@ -49,6 +50,11 @@ EXIT_AT_ONCE = frozenset({"render"})
 cluster, server or thread that outlives them (a command that may, such as those with ``--scheduler``, ends as
 the interpreter ends)."""
 
+OWN_KERNELS_ONLY = frozenset({"render"})
+"""Commands whose program process runs vlref's kernels alone (no user code, no plug-in): :func:`program_command`
+declares it (:func:`vlref.jit_init.own_kernels_only`), so Numba initialises there without its cffi support and
+without scanning the installed distributions for Numba extensions."""
+
 
 def command(name: str):
     """The module of sub-command ``name`` (imported when used)."""
@@ -59,7 +65,10 @@ def program_command(name: str):
     """:func:`command` as the ``vlref`` program imports it: with the garbage collector off while the modules
     (NumPy's, Numba's, vlref's: ~130 000 objects, none of them garbage) are imported, instead of its repeated
     collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
-    frozen out of its sight (:func:`gc.freeze`, see :func:`main`)."""
+    frozen out of its sight (:func:`gc.freeze`, see :func:`main`). For a command of :data:`OWN_KERNELS_ONLY` it
+    declares the process one that runs vlref's kernels alone (:func:`vlref.jit_init.own_kernels_only`)."""
+    if name in OWN_KERNELS_ONLY:
+        own_kernels_only()
     enabled = gc.isenabled()
     gc.disable()
     try:
