@@ -8,7 +8,7 @@
 # 3. the outputs of (b) at 1920x1080 (16 steps) written by each tree's `vlref render` path, hashed.
 set -e
 BRANCH=$1
-python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
+python3 -m pip install -q --upgrade --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
 export PYTHONPATH=/tmp/site LD_LIBRARY_PATH=$PWD/.device-libs/lib:$LD_LIBRARY_PATH XDG_RUNTIME_DIR=/tmp \
        NUMBA_CACHE_DIR=/tmp/nc PYTHONUNBUFFERED=1 PYTHONPYCACHEPREFIX=/tmp/pyc
 ROOT=$PWD
@@ -20,7 +20,7 @@ python3 -m compileall -q -j 0 $SP/numpy $SP/numba $SP/llvmlite $SP/scipy $SP/yam
     /tmp/site > /dev/null 2>&1 || true
 lscpu | grep -E "Model name|^CPU\(s\)" ; nproc; python3 -c "import sys, numba, numpy; print(sys.version, numba.__version__, numpy.__version__)"
 python3 -c "from importlib import metadata; print('distributions:', len(list(metadata.distributions())))"
-cd /tmp/ab/main
+mkdir -p $OUT/ab1 $OUT/ab2 && cd /tmp/ab/main
 python3 $BR/benchmarks/startup_ab.py $OUT/ab1 150 $BR
 python3 $BR/benchmarks/startup_ab.py $OUT/ab2 20 $BR
 HASH='
