@@ -23,8 +23,8 @@ load raising, a Numba without ``numba.core.registry.cpu_target``), Numba initial
 ``render`` and ``render_reference`` call it before their first kernel; it costs nothing once Numba is initialised.
 
 **A process that runs vlref's kernels alone** (the ``vlref render`` program's own process: no user code runs
-in it; :func:`own_kernels_only`, called by :func:`vlref.cli.commands.program_command`) initialises Numba without
-two parts that serve only other code: its cffi support (``numba.core.typing.cffi_utils`` imports ``cffi`` and
+in it; :func:`vlref.processes.declare_own_kernels_only`, called by :func:`vlref.cli.commands.program_command`)
+initialises Numba without two parts that serve only other code: its cffi support (``numba.core.typing.cffi_utils`` imports ``cffi`` and
 builds a ``cffi.FFI()``, whose C parser imports ``pycparser``, where cffi is installed: it is wherever wgpu is)
 and the ``numba_extensions`` entry points of every installed distribution (``numba.core.entrypoints.init_all``:
 ``importlib.metadata`` reads the metadata of each one). With ``cffi`` absent from ``sys.modules`` for the duration
@@ -45,28 +45,24 @@ import sys
 
 from numba.core import compiler_lock, entrypoints, registry
 
-__all__ = ["initialise_numba", "own_kernels_only", "BLAS_MODULE"]
+from .processes import own_kernels_only
+
+__all__ = ["initialise_numba", "BLAS_MODULE"]
 
 BLAS_MODULE = "scipy.linalg.cython_blas"
 """The module Numba's BLAS check imports (``numba.np.linalg.ensure_blas``)."""
 
 _done = [False]
-_own_kernels_only = [False]
-
-
-def own_kernels_only() -> None:
-    """Declare this process one that runs vlref's kernels alone (no user code; module docstring): its Numba
-    initialisation, if still to come, leaves out cffi support and the ``numba_extensions`` entry points."""
-    _own_kernels_only[0] = True
-
 
 @contextlib.contextmanager
 def _without_foreign_support():
-    """For the duration of Numba's ``refresh()`` in a process of :func:`own_kernels_only`: ``cffi`` not importable
+    """For the duration of Numba's ``refresh()`` in a process that runs vlref's kernels alone
+    (:func:`vlref.processes.own_kernels_only`): ``cffi`` not importable
     (``sys.modules["cffi"] = None``, removed again after) where neither cffi nor Numba's cffi module is imported
     yet, and Numba's extension entry points marked loaded where they are not yet."""
-    hide = _own_kernels_only[0] and "cffi" not in sys.modules and "numba.core.typing.cffi_utils" not in sys.modules
-    if _own_kernels_only[0] and not getattr(entrypoints, "_already_initialized", True):
+    own = own_kernels_only()
+    hide = own and "cffi" not in sys.modules and "numba.core.typing.cffi_utils" not in sys.modules
+    if own and not getattr(entrypoints, "_already_initialized", True):
         entrypoints._already_initialized = True
     if hide:
         sys.modules["cffi"] = None

@@ -6,7 +6,8 @@ process it started (``vlref warmup``'s pool, ``vlref render``'s stage compilers,
 traceback. Children started inside :func:`ignoring_sigint` ignore SIGINT from their first instruction (an
 ignored signal stays ignored across ``fork`` and ``exec``, and Python then installs no KeyboardInterrupt
 handler, nor does asyncio); the parent alone handles it, and stops them (terminates its pool, closes its
-cluster). :func:`host_cores` says how many processes or threads this one may keep busy.
+cluster). :func:`host_cores` says how many processes or threads this one may keep busy;
+:func:`declare_own_kernels_only` and :func:`own_kernels_only` say whether this process runs vlref's kernels alone.
 """
 
 from __future__ import annotations
@@ -17,7 +18,22 @@ import signal
 import threading
 from typing import Iterator
 
-__all__ = ["ignoring_sigint", "host_cores"]
+__all__ = ["ignoring_sigint", "host_cores", "declare_own_kernels_only", "own_kernels_only"]
+
+_OWN_KERNELS_ONLY = [False]
+
+
+def declare_own_kernels_only() -> None:
+    """Declare this process one that runs vlref's kernels alone: no user code, no plug-in (the ``vlref render``
+    program's own process, :data:`vlref.cli.commands.OWN_KERNELS_ONLY`). Numba's initialisation then leaves out
+    what serves only other code (:mod:`vlref.jit_init`). Kept here, in a module that imports nothing heavy, so
+    that the program declares it before its command's imports (which it makes with the collector off)."""
+    _OWN_KERNELS_ONLY[0] = True
+
+
+def own_kernels_only() -> bool:
+    """Whether :func:`declare_own_kernels_only` was called in this process."""
+    return _OWN_KERNELS_ONLY[0]
 
 
 def host_cores() -> int:

@@ -21,7 +21,7 @@ import sys
 import threading
 
 from .. import __version__
-from ..jit_init import own_kernels_only
+from ..processes import declare_own_kernels_only
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
@@ -52,8 +52,8 @@ the interpreter ends)."""
 
 OWN_KERNELS_ONLY = frozenset({"render"})
 """Commands whose program process runs vlref's kernels alone (no user code, no plug-in): :func:`program_command`
-declares it (:func:`vlref.jit_init.own_kernels_only`), so Numba initialises there without its cffi support and
-without scanning the installed distributions for Numba extensions."""
+declares it (:func:`vlref.processes.declare_own_kernels_only`), so Numba initialises there without its cffi support
+and without scanning the installed distributions for Numba extensions (:mod:`vlref.jit_init`)."""
 
 
 def command(name: str):
@@ -66,9 +66,9 @@ def program_command(name: str):
     (NumPy's, Numba's, vlref's: ~130 000 objects, none of them garbage) are imported, instead of its repeated
     collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
     frozen out of its sight (:func:`gc.freeze`, see :func:`main`). For a command of :data:`OWN_KERNELS_ONLY` it
-    declares the process one that runs vlref's kernels alone (:func:`vlref.jit_init.own_kernels_only`)."""
+    declares the process one that runs vlref's kernels alone (:func:`vlref.processes.declare_own_kernels_only`)."""
     if name in OWN_KERNELS_ONLY:
-        own_kernels_only()
+        declare_own_kernels_only()
     enabled = gc.isenabled()
     gc.disable()
     try:

@@ -42,8 +42,8 @@ def fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
-_SYNCED_BESIDE: dict[Path, tuple[concurrent.futures.ThreadPoolExecutor, list[concurrent.futures.Future]]] = {}
-"""The folders of :func:`synced_beside` now open, each with the threads that fsync its files."""
+_SYNCED_BESIDE: dict = {}
+"""The folders of :func:`synced_beside` now open: ``{folder: (thread pool, futures of its files' fsyncs)}``."""
 _SYNCED_BESIDE_LOCK = threading.Lock()
 
 
