@@ -5,7 +5,8 @@
 # 1. everything the processes import byte-compiled into PYTHONPYCACHEPREFIX (the device's NumPy has no .pyc files);
 # 2. benchmarks/startup_ab.py twice in a copy of main (one Numba cache: the branch changes no kernel file): main,
 #    branch, branch, main, main, branch each time, the bench's whole_render with its split; the first also profiles;
-# 3. the outputs of (b) at 1920x1080 (16 steps) written by each tree's `vlref render` path, hashed.
+# 3. the outputs of (b) at 1920x1080 (16 steps) written by each tree's `vlref render` path, hashed;
+# 4. Numba's initialisation alone in fresh processes of the branch, declared own-kernels-only or not, alternated.
 set -e
 BRANCH=$1
 python3 -m pip install -q --upgrade --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
@@ -37,3 +38,4 @@ CHANGED=$(cd $BR && for f in $(find vlref -name '*.py'); do cmp -s $f /tmp/ab/ma
 echo "changed: $CHANGED"
 for f in $CHANGED; do cp $BR/$f /tmp/ab/main/$f; done
 echo "branch $(python3 -c "$HASH")" | tee -a $OUT/hashes.txt
+PYTHONPATH=/tmp/ab/main:$PYTHONPATH python3 $BR/benchmarks/own_kernels_init.py 4 | tee $OUT/own_kernels_init.txt
