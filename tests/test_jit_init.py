@@ -120,3 +120,35 @@ def test_the_render_programs_process_initialises_numba_without_cffi_and_extensio
         check=True).stdout.strip().splitlines()[-1])
     assert other == {"cffi imported": True, "pycparser imported": True, "numba cffi support": True,
                      "extensions loaded": True, "cffi works": True}
+
+
+WITH_CONFIG_FILE = r"""
+import json, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import numba.core.config as config
+state = {"yaml imported": "yaml" in sys.modules, "numba reads its file": config._HAVE_YAML,
+         "threads": config.NUMBA_NUM_THREADS}
+import yaml  # a complete import afterwards
+state["yaml works"] = yaml.safe_load("a: 1") == {"a": 1}
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_numba_without_yaml_unless_numba_has_a_file_to_read(tmp_path):
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}  # the variable would override the file
+
+    def state(command):
+        proc = subprocess.run([sys.executable, "-c", WITH_CONFIG_FILE, command], capture_output=True, text=True,
+                              check=True, cwd=tmp_path, env=env)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+
+    without = state("render")
+    assert without["yaml imported"] is False and without["numba reads its file"] is False and without["yaml works"]
+    (tmp_path / ".numba_config.yaml").write_text("num_threads: 1\n")  # Numba reads it: PyYAML is imported for it
+    assert state("render") == {"yaml imported": True, "numba reads its file": True, "threads": 1,
+                               "yaml works": True}
+    (tmp_path / ".numba_config.yaml").unlink()
+    assert state("scenes")["yaml imported"]  # another command: Numba's import as always
