@@ -45,7 +45,7 @@ import sys
 
 from numba.core import compiler_lock, entrypoints, registry
 
-from .processes import own_kernels_only
+from .processes import not_importable, own_kernels_only
 
 __all__ = ["initialise_numba", "BLAS_MODULE"]
 
@@ -54,23 +54,15 @@ BLAS_MODULE = "scipy.linalg.cython_blas"
 
 _done = [False]
 
-@contextlib.contextmanager
 def _without_foreign_support():
-    """For the duration of Numba's ``refresh()`` in a process that runs vlref's kernels alone
-    (:func:`vlref.processes.own_kernels_only`): ``cffi`` not importable
-    (``sys.modules["cffi"] = None``, removed again after) where neither cffi nor Numba's cffi module is imported
-    yet, and Numba's extension entry points marked loaded where they are not yet."""
+    """A block for Numba's ``refresh()``: in a process that runs vlref's kernels alone
+    (:func:`vlref.processes.own_kernels_only`), Numba's extension entry points marked loaded where they are not yet,
+    and ``cffi`` not importable (:func:`vlref.processes.not_importable`) where Numba's cffi module is not imported
+    yet."""
     own = own_kernels_only()
-    hide = own and "cffi" not in sys.modules and "numba.core.typing.cffi_utils" not in sys.modules
     if own and not getattr(entrypoints, "_already_initialized", True):
         entrypoints._already_initialized = True
-    if hide:
-        sys.modules["cffi"] = None
-    try:
-        yield
-    finally:
-        if hide and "cffi" in sys.modules and sys.modules["cffi"] is None:
-            del sys.modules["cffi"]
+    return not_importable("cffi", own and "numba.core.typing.cffi_utils" not in sys.modules)
 
 
 def _cython_blas_alone():

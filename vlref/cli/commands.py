@@ -21,7 +21,7 @@ import sys
 import threading
 
 from .. import __version__
-from ..processes import declare_own_kernels_only
+from ..processes import declare_own_kernels_only, not_importable
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
@@ -86,21 +86,12 @@ NUMBA_CONFIG_FILE = ".numba_config.yaml"
 """The file of settings Numba reads from the current folder at its import, with PyYAML (``numba.core.config``)."""
 
 
-@contextlib.contextmanager
 def _numba_without_yaml():
-    """Inside the block, where Numba is still to be imported, PyYAML is too and the current folder holds no
-    :data:`NUMBA_CONFIG_FILE`: ``yaml`` not importable (``sys.modules["yaml"] = None``, removed again after). Numba's
-    configuration imports PyYAML at its import only to read that file (and warns when the file exists without
-    PyYAML); without the file its settings are the same either way, and the import of PyYAML (~0.01 s) is saved.
-    A later ``import yaml`` in the process is a complete import."""
-    hide = not any(m in sys.modules for m in ("numba", "yaml")) and not os.path.isfile(NUMBA_CONFIG_FILE)
-    if hide:
-        sys.modules["yaml"] = None
-    try:
-        yield
-    finally:
-        if hide and "yaml" in sys.modules and sys.modules["yaml"] is None:
-            del sys.modules["yaml"]
+    """A block in which ``yaml`` is not importable (:func:`vlref.processes.not_importable`) where Numba and PyYAML
+    are still to be imported and the current folder holds no :data:`NUMBA_CONFIG_FILE`. Numba's configuration imports
+    PyYAML at its import only to read that file (and warns when the file exists without PyYAML); without the file
+    its settings are the same either way, and the import of PyYAML (~0.01 s) is saved."""
+    return not_importable("yaml", "numba" not in sys.modules and not os.path.isfile(NUMBA_CONFIG_FILE))
 
 
 def build_parser() -> argparse.ArgumentParser:
