@@ -24,14 +24,15 @@ load raising, a Numba without ``numba.core.registry.cpu_target``), Numba initial
 
 **A process that runs vlref's kernels alone** (the ``vlref render`` program's own process: no user code runs
 in it; :func:`vlref.processes.declare_own_kernels_only`, called by :func:`vlref.cli.commands.program_command`)
-initialises Numba without two parts that serve only other code: its cffi support (``numba.core.typing.cffi_utils`` imports ``cffi`` and
-builds a ``cffi.FFI()``, whose C parser imports ``pycparser``, where cffi is installed: it is wherever wgpu is)
-and the ``numba_extensions`` entry points of every installed distribution (``numba.core.entrypoints.init_all``:
-``importlib.metadata`` reads the metadata of each one). With ``cffi`` absent from ``sys.modules`` for the duration
-of ``refresh()`` only, Numba's module finds no cffi and registers no cffi types, exactly as where cffi is not
-installed; the entry points are marked loaded (Numba's own flag) before they are scanned. vlref's kernels call no
-cffi function and no Numba extension; a later ``import cffi`` in the process is a complete import (only Numba's
-cffi support stays off in it). 0.02-0.04 s of the initialisation's 0.17-0.22 s on the dev box (BENCHMARKS.md
+initialises Numba without two parts that serve only other code: its cffi support
+(``numba.core.typing.cffi_utils`` imports ``cffi`` and builds a ``cffi.FFI()``, whose C parser imports
+``pycparser``, where cffi is installed: it is wherever wgpu is) and the ``numba_extensions`` entry points of every
+installed distribution (``numba.core.entrypoints.init_all``: ``importlib.metadata`` reads the metadata of each
+one). With ``cffi`` absent from ``sys.modules`` for the duration of ``refresh()`` only, Numba's module finds no
+cffi and registers no cffi types, exactly as where cffi is not installed; the entry points are marked loaded
+(Numba's own flag) before they are scanned. vlref's kernels call no cffi function and no Numba extension; a later
+``import cffi`` in the process is a complete import (only Numba's cffi support stays off in it). Dev box: the
+initialisation 0.19-0.22 → 0.16-0.18 s; device 0.139 → 0.112 s (BENCHMARKS.md
 "The program's own process: Numba without cffi and extensions, files synced beside the writing").
 """
 
@@ -53,6 +54,7 @@ BLAS_MODULE = "scipy.linalg.cython_blas"
 """The module Numba's BLAS check imports (``numba.np.linalg.ensure_blas``)."""
 
 _done = [False]
+
 
 def _without_foreign_support():
     """A block for Numba's ``refresh()``: in a process that runs vlref's kernels alone

@@ -25,7 +25,8 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["atomic_write", "fsync_dir", "synced_beside", "require_file", "write_bytes", "write_text", "write_npy", "write_npz"]
+__all__ = ["atomic_write", "fsync_dir", "synced_beside", "require_file", "write_bytes", "write_text", "write_npy",
+           "write_npz"]
 
 
 def fsync_dir(directory: Path) -> None:
@@ -48,7 +49,7 @@ _SYNCED_BESIDE_LOCK = threading.Lock()
 
 
 def _fsync_file(path: Path) -> None:
-    """Flush ``path``'s data to disk (fsync of a new descriptor: it flushes the file, not the descriptor)."""
+    """Flush ``path``'s data to disk (POSIX: fsync of a new read-only descriptor flushes the file)."""
     fd = os.open(path, os.O_RDONLY)
     try:
         os.fsync(fd)
