@@ -1,7 +1,9 @@
 """Numba's one-time initialisation without ``scipy.linalg`` (vlref.jit_init): a render leaves ``scipy.linalg``
 unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
-works in the same process afterwards. Each case runs in a fresh interpreter (the initialisation happens once a
-process)."""
+works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
+initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
+``.numba_config.yaml`` to read; other processes as always. Each case runs in a fresh interpreter (the
+initialisation happens once a process)."""
 
 import json
 import subprocess
@@ -91,7 +93,8 @@ OWN_KERNELS = r"""
 import json, sys
 import numba.core.entrypoints
 from vlref.cli.commands import program_command
-render_to_folder = program_command(sys.argv[1]).render_to_folder
+program_command(sys.argv[1])  # only "render" declares its process one that runs vlref's kernels alone
+from vlref.cli.render import render_to_folder
 import tempfile
 from vlref.scene import load_scene
 with tempfile.TemporaryDirectory() as folder:
@@ -114,10 +117,8 @@ def test_the_render_programs_process_initialises_numba_without_cffi_and_extensio
     assert program == {"cffi imported": False, "pycparser imported": False, "numba cffi support": False,
                        "extensions loaded": True, "cffi works": True}
     # another command's process (it may run a user's code or a cluster): Numba as it always initialises
-    other = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS.replace(
-        "program_command(sys.argv[1]).render_to_folder", "program_command(sys.argv[1]) and "
-        "__import__('vlref.cli.render').cli.render.render_to_folder"), "scenes"], capture_output=True, text=True,
-        check=True).stdout.strip().splitlines()[-1])
+    other = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS, "scenes"], capture_output=True, text=True,
+                                      check=True).stdout.strip().splitlines()[-1])
     assert other == {"cffi imported": True, "pycparser imported": True, "numba cffi support": True,
                      "extensions loaded": True, "cffi works": True}
 
