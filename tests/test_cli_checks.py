@@ -247,6 +247,18 @@ def test_the_program_imports_its_command_with_the_collector_off_and_turns_it_bac
         gc.unfreeze()
 
 
+def test_the_command_table_imports_nothing_heavy():
+    # the program imports its command's modules (NumPy, Numba, vlref's kernels) with the collector off
+    # (program_command); the module it imports before that, with the collector on, must not pull them in
+    import subprocess
+    import sys
+
+    code = ("import sys, vlref.cli.commands; print(sorted(m for m in ('numpy', 'numba', 'llvmlite', 'scipy', "
+            "'vlref.jit_init', 'vlref.render') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene

@@ -322,6 +322,70 @@ def test_output_dir_leaves_nothing_on_failure(tmp_path):
             pass
 
 
+def _record_syncs_and_moves(monkeypatch, fail: bool = False):
+    """Wrap os.fsync and os.replace: the events in order, a file known by its inode (it survives renames);
+    ``fail``: every fsync of a file (not of a folder) raises OSError."""
+    import stat
+    import threading
+
+    events, fsync, replace = [], os.fsync, os.replace
+
+    def recording_fsync(fd):
+        st = os.fstat(fd)
+        events.append(("fsync", st.st_ino, threading.current_thread().name))
+        if fail and not stat.S_ISDIR(st.st_mode):
+            raise OSError(5, "Input/output error")
+        return fsync(fd)
+
+    def recording_replace(src, dst):
+        events.append(("replace", os.stat(src).st_ino, str(dst)))
+        return replace(src, dst)
+
+    monkeypatch.setattr(os, "fsync", recording_fsync)
+    monkeypatch.setattr(os, "replace", recording_replace)
+    return events
+
+
+def _fake_result():
+    rng = np.random.default_rng(11)
+    return types.SimpleNamespace(buffers={"final": rng.random((8, 12, 3)), "depth": rng.random((8, 12)) * 50.0},
+                                 metadata={"technique": "physical"})
+
+
+def test_output_dir_has_every_file_on_disk_before_it_moves_one_in(tmp_path, monkeypatch):
+    out = tmp_path / "out"
+    events = _record_syncs_and_moves(monkeypatch)
+    with output_dir(out) as tmp:
+        save_render(tmp, _fake_result(), stages=False, main=("final", "depth"))
+    names = sorted(p.name for p in out.iterdir())
+    assert names == ["depth.exr", "final.exr", "final.png"]
+    inodes = {(out / n).stat().st_ino: n for n in names}
+    moves_in = [i for i, e in enumerate(events) if e[0] == "replace" and e[2].startswith(str(out) + os.sep)]
+    assert sorted(inodes[events[i][1]] for i in moves_in) == names
+    for ino, name in inodes.items():  # each file's data flushed, on an fsync thread, before the first move in
+        syncs = [i for i, e in enumerate(events) if e[0] == "fsync" and e[1] == ino]
+        assert syncs and max(syncs) < min(moves_in), name
+        assert all(events[i][2].startswith("vlref-fsync") for i in syncs), name
+    # then the destination folder's entries
+    assert events[-1][0] == "fsync" and events[-1][1] == out.stat().st_ino
+    # outside an output folder: the file flushed on the calling thread before its rename, as always
+    events.clear()
+    path = write_text(tmp_path / "alone.txt", "x")
+    kinds = [(e[0], e[1] == path.stat().st_ino) for e in events]
+    assert kinds[:2] == [("fsync", True), ("replace", True)]
+    assert events[0][2] == __import__("threading").current_thread().name
+
+
+def test_output_dir_whose_file_cannot_be_synced_leaves_nothing(tmp_path, monkeypatch):
+    events = _record_syncs_and_moves(monkeypatch, fail=True)
+    out = tmp_path / "out"
+    with pytest.raises(OSError, match="Input/output error"):
+        with output_dir(out) as tmp:
+            save_render(tmp, _fake_result(), stages=False, main=("final", "depth"))
+    assert _no_stray_files(tmp_path) == []  # neither the destination nor the temporary folder
+    assert not any(e[0] == "replace" and e[2].startswith(str(out)) for e in events)
+
+
 def test_save_buffers_and_save_render(tmp_path):
     rng = np.random.default_rng(3)
     buffers = {"final": rng.random((4, 6, 3)), "depth": np.where(rng.random((4, 6)) < 0.3, np.inf, 5.0),

@@ -1,7 +1,9 @@
 """Numba's one-time initialisation without ``scipy.linalg`` (vlref.jit_init): a render leaves ``scipy.linalg``
 unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
-works in the same process afterwards. Each case runs in a fresh interpreter (the initialisation happens once a
-process)."""
+works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
+initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
+``.numba_config.yaml`` to read; other processes as always. Each case runs in a fresh interpreter (the
+initialisation happens once a process)."""
 
 import json
 import subprocess
@@ -85,3 +87,69 @@ def test_with_scipy_linalg_already_imported_numba_initialises_as_usual():
 
 def test_where_the_extension_cannot_be_loaded_alone_numba_initialises_as_usual():
     assert _state(NOT_LOADABLE) == {"have_blas": True, "scipy.linalg": True}
+
+
+OWN_KERNELS = r"""
+import json, sys
+import numba.core.entrypoints
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])  # only "render" declares its process one that runs vlref's kernels alone
+from vlref.cli.render import render_to_folder
+import tempfile
+from vlref.scene import load_scene
+with tempfile.TemporaryDirectory() as folder:
+    render_to_folder(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]), folder + "/out")
+from numba.core.typing import cffi_utils
+state = {"cffi imported": "cffi" in sys.modules, "pycparser imported": "pycparser" in sys.modules,
+         "numba cffi support": cffi_utils.SUPPORTED, "extensions loaded": numba.core.entrypoints._already_initialized}
+import cffi  # a complete import afterwards, whatever Numba's support
+state["cffi works"] = cffi.FFI().sizeof("int") == 4
+print(json.dumps(state))
+"""
+
+
+def test_the_render_programs_process_initialises_numba_without_cffi_and_extensions():
+    # cffi is installed wherever wgpu is (the test extra): it must be, for this to test anything
+    import importlib.util
+    assert importlib.util.find_spec("cffi") is not None, "cffi is a dependency of wgpu, which the test extra installs"
+    program = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS, "render"], capture_output=True,
+                                        text=True, check=True).stdout.strip().splitlines()[-1])
+    assert program == {"cffi imported": False, "pycparser imported": False, "numba cffi support": False,
+                       "extensions loaded": True, "cffi works": True}
+    # another command's process (it may run a user's code or a cluster): Numba as it always initialises
+    other = json.loads(subprocess.run([sys.executable, "-c", OWN_KERNELS, "scenes"], capture_output=True, text=True,
+                                      check=True).stdout.strip().splitlines()[-1])
+    assert other == {"cffi imported": True, "pycparser imported": True, "numba cffi support": True,
+                     "extensions loaded": True, "cffi works": True}
+
+
+WITH_CONFIG_FILE = r"""
+import json, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import numba.core.config as config
+state = {"yaml imported": "yaml" in sys.modules, "numba reads its file": config._HAVE_YAML,
+         "threads": config.NUMBA_NUM_THREADS}
+import yaml  # a complete import afterwards
+state["yaml works"] = yaml.safe_load("a: 1") == {"a": 1}
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_numba_without_yaml_unless_numba_has_a_file_to_read(tmp_path):
+    import os
+
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_NUM_THREADS"}  # the variable would override the file
+
+    def state(command):
+        proc = subprocess.run([sys.executable, "-c", WITH_CONFIG_FILE, command], capture_output=True, text=True,
+                              check=True, cwd=tmp_path, env=env)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+
+    without = state("render")
+    assert without["yaml imported"] is False and without["numba reads its file"] is False and without["yaml works"]
+    (tmp_path / ".numba_config.yaml").write_text("num_threads: 1\n")  # Numba reads it: PyYAML is imported for it
+    assert state("render") == {"yaml imported": True, "numba reads its file": True, "threads": 1,
+                               "yaml works": True}
+    (tmp_path / ".numba_config.yaml").unlink()
+    assert state("scenes")["yaml imported"]  # another command: Numba's import as always

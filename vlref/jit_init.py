@@ -21,6 +21,19 @@ target already initialised, ``scipy.linalg`` or the module already imported, Sci
 load raising, a Numba without ``numba.core.registry.cpu_target``), Numba initialises as it always does.
 
 ``render`` and ``render_reference`` call it before their first kernel; it costs nothing once Numba is initialised.
+
+**A process that runs vlref's kernels alone** (the ``vlref render`` program's own process: no user code runs
+in it; :func:`vlref.processes.declare_own_kernels_only`, called by :func:`vlref.cli.commands.program_command`)
+initialises Numba without two parts that serve only other code: its cffi support
+(``numba.core.typing.cffi_utils`` imports ``cffi`` and builds a ``cffi.FFI()``, whose C parser imports
+``pycparser``, where cffi is installed: it is wherever wgpu is) and the ``numba_extensions`` entry points of every
+installed distribution (``numba.core.entrypoints.init_all``: ``importlib.metadata`` reads the metadata of each
+one). With ``cffi`` absent from ``sys.modules`` for the duration of ``refresh()`` only, Numba's module finds no
+cffi and registers no cffi types, exactly as where cffi is not installed; the entry points are marked loaded
+(Numba's own flag) before they are scanned. vlref's kernels call no cffi function and no Numba extension; a later
+``import cffi`` in the process is a complete import (only Numba's cffi support stays off in it). Dev box: the
+initialisation 0.19-0.22 → 0.16-0.18 s; device 0.139 → 0.112 s (BENCHMARKS.md
+"The program's own process: Numba without cffi and extensions, files synced beside the writing").
 """
 
 from __future__ import annotations
@@ -31,7 +44,9 @@ import importlib.util
 import os
 import sys
 
-from numba.core import compiler_lock, registry
+from numba.core import compiler_lock, entrypoints, registry
+
+from .processes import not_importable, own_kernels_only
 
 __all__ = ["initialise_numba", "BLAS_MODULE"]
 
@@ -39,6 +54,17 @@ BLAS_MODULE = "scipy.linalg.cython_blas"
 """The module Numba's BLAS check imports (``numba.np.linalg.ensure_blas``)."""
 
 _done = [False]
+
+
+def _without_foreign_support():
+    """A block for Numba's ``refresh()``: in a process that runs vlref's kernels alone
+    (:func:`vlref.processes.own_kernels_only`), Numba's extension entry points marked loaded where they are not yet,
+    and ``cffi`` not importable (:func:`vlref.processes.not_importable`) where Numba's cffi module is not imported
+    yet."""
+    own = own_kernels_only()
+    if own and not getattr(entrypoints, "_already_initialized", True):
+        entrypoints._already_initialized = True
+    return not_importable("cffi", own and "numba.core.typing.cffi_utils" not in sys.modules)
 
 
 def _cython_blas_alone():
@@ -68,7 +94,7 @@ def initialise_numba() -> None:
     cpu_target = getattr(registry, "cpu_target", None)
     if cpu_target is None:  # a Numba without it: its first kernel initialises it
         return
-    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext():
+    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext(), _without_foreign_support():
         module = None
         if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
                 and BLAS_MODULE not in sys.modules:

@@ -6,7 +6,9 @@ process it started (``vlref warmup``'s pool, ``vlref render``'s stage compilers,
 traceback. Children started inside :func:`ignoring_sigint` ignore SIGINT from their first instruction (an
 ignored signal stays ignored across ``fork`` and ``exec``, and Python then installs no KeyboardInterrupt
 handler, nor does asyncio); the parent alone handles it, and stops them (terminates its pool, closes its
-cluster). :func:`host_cores` says how many processes or threads this one may keep busy.
+cluster). :func:`host_cores` says how many processes or threads this one may keep busy;
+:func:`declare_own_kernels_only` and :func:`own_kernels_only` say whether this process runs vlref's kernels alone,
+and :func:`not_importable` keeps a package out of an import that does not need it.
 """
 
 from __future__ import annotations
@@ -14,10 +16,41 @@ from __future__ import annotations
 import contextlib
 import os
 import signal
+import sys
 import threading
 from typing import Iterator
 
-__all__ = ["ignoring_sigint", "host_cores"]
+__all__ = ["ignoring_sigint", "host_cores", "declare_own_kernels_only", "own_kernels_only", "not_importable"]
+
+_OWN_KERNELS_ONLY = [False]
+
+
+def declare_own_kernels_only() -> None:
+    """Declare this process one that runs vlref's kernels alone: no user code, no plug-in (the ``vlref render``
+    program's own process, :data:`vlref.cli.commands.OWN_KERNELS_ONLY`). Numba's initialisation then leaves out
+    what serves only other code (:mod:`vlref.jit_init`). Kept here, in a module that imports nothing heavy, so
+    that the program declares it before its command's imports (which it makes with the collector off)."""
+    _OWN_KERNELS_ONLY[0] = True
+
+
+def own_kernels_only() -> bool:
+    """Whether :func:`declare_own_kernels_only` was called in this process."""
+    return _OWN_KERNELS_ONLY[0]
+
+
+@contextlib.contextmanager
+def not_importable(name: str, when: bool = True) -> Iterator[None]:
+    """Inside the block, where ``when`` holds and ``name`` is not imported yet, ``import name`` raises ImportError as
+    where the package is not installed (``sys.modules[name] = None``); the entry is removed again after, so a later
+    import is a complete one. For a package that another package's import tries and does without."""
+    hide = when and name not in sys.modules
+    if hide:
+        sys.modules[name] = None
+    try:
+        yield
+    finally:
+        if hide and name in sys.modules and sys.modules[name] is None:
+            del sys.modules[name]
 
 
 def host_cores() -> int:

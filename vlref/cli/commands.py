@@ -21,11 +21,12 @@ import sys
 import threading
 
 from .. import __version__
+from ..processes import declare_own_kernels_only, not_importable
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
-__all__ = ["COMMANDS", "EXIT_AT_ONCE", "command", "program_command", "build_parser", "main", "exit_at_once",
-           "Interrupted"]
+__all__ = ["COMMANDS", "EXIT_AT_ONCE", "OWN_KERNELS_ONLY", "command", "program_command", "build_parser", "main",
+           "exit_at_once", "Interrupted"]
 
 COMMANDS = {
     # name: (module of vlref.cli, prefix of its error messages)
@@ -49,6 +50,11 @@ EXIT_AT_ONCE = frozenset({"render"})
 cluster, server or thread that outlives them (a command that may, such as those with ``--scheduler``, ends as
 the interpreter ends)."""
 
+OWN_KERNELS_ONLY = frozenset({"render"})
+"""Commands whose program process runs vlref's kernels alone (no user code, no plug-in): :func:`program_command`
+declares it (:func:`vlref.processes.declare_own_kernels_only`), so Numba initialises there without its cffi support
+and without scanning the installed distributions for Numba extensions (:mod:`vlref.jit_init`)."""
+
 
 def command(name: str):
     """The module of sub-command ``name`` (imported when used)."""
@@ -59,15 +65,33 @@ def program_command(name: str):
     """:func:`command` as the ``vlref`` program imports it: with the garbage collector off while the modules
     (NumPy's, Numba's, vlref's: ~130 000 objects, none of them garbage) are imported, instead of its repeated
     collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
-    frozen out of its sight (:func:`gc.freeze`, see :func:`main`)."""
+    frozen out of its sight (:func:`gc.freeze`, see :func:`main`). For a command of :data:`OWN_KERNELS_ONLY` it
+    declares the process one that runs vlref's kernels alone (:func:`vlref.processes.declare_own_kernels_only`)
+    and imports Numba without PyYAML where Numba has no file to read with it (:func:`_numba_without_yaml`)."""
+    own = name in OWN_KERNELS_ONLY
+    if own:
+        declare_own_kernels_only()
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return command(name)
+        with _numba_without_yaml() if own else contextlib.nullcontext():
+            return command(name)
     finally:
         gc.freeze()
         if enabled:
             gc.enable()
+
+
+NUMBA_CONFIG_FILE = ".numba_config.yaml"
+"""The file of settings Numba reads from the current folder at its import, with PyYAML (``numba.core.config``)."""
+
+
+def _numba_without_yaml():
+    """A block in which ``yaml`` is not importable (:func:`vlref.processes.not_importable`) where Numba and PyYAML
+    are still to be imported and the current folder holds no :data:`NUMBA_CONFIG_FILE`. Numba's configuration imports
+    PyYAML at its import only to read that file (and warns when the file exists without PyYAML); without the file
+    its settings are the same either way, and the import of PyYAML (~0.01 s) is saved."""
+    return not_importable("yaml", "numba" not in sys.modules and not os.path.isfile(NUMBA_CONFIG_FILE))
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Iterator
 
 from ..errors import InputError
-from .files import fsync_dir
+from .files import fsync_dir, synced_beside
 
 __all__ = ["output_dir", "check_output_dir", "check_output_file"]
 
@@ -91,12 +91,17 @@ def output_dir(path: str | os.PathLike) -> Iterator[Path]:
     folders and ``path`` are created and every file is moved in with ``os.replace`` (files already in
     ``path`` with the same names are replaced, others are kept). When the block raises, the temporary
     folder is deleted and ``path`` is left exactly as it was (not even created).
+
+    The files written into the temporary folder through :mod:`vlref.io.files` are fsynced on threads beside the
+    writing (:func:`vlref.io.files.synced_beside`); every one is on disk before the first is moved in.
     """
     final = Path(path)
     anchor = check_output_dir(final)
     tmp = Path(tempfile.mkdtemp(prefix=f".{final.name}.", suffix=".partial", dir=anchor))
     try:
-        yield tmp
+        with synced_beside(tmp) as wait_synced:
+            yield tmp
+            wait_synced()
         final.mkdir(parents=True, exist_ok=True)
         for src in sorted(tmp.rglob("*")):  # parents sort before their contents
             dst = final / src.relative_to(tmp)
