@@ -137,15 +137,16 @@ def test_reference_refuses_an_empty_shadow_grid(tmp_path, capsys):
     assert not (tmp_path / "ref").exists()
 
 
-def test_reference_solves_with_the_rule_asked_for_and_records_it(tmp_path):
+@pytest.mark.parametrize("rule", [7, 3])
+def test_reference_solves_with_the_rule_asked_for_and_records_it(tmp_path, rule):
     out = tmp_path / "ref"
     assert main(["reference", "pillars", "-o", str(out), "--set", "render.width=12", "--set", "render.height=8",
-                 "--rel-tol", "1e-1", "--shadow-samples", "8", "--rule", "7"]) == 0
+                 "--rel-tol", "1e-1", "--shadow-samples", "8", "--rule", str(rule)]) == 0
     _, meta = read_exr(out / "inscatter.exr")
-    assert meta["rule"] == "7" and meta["shadow_samples"] == "8"
+    assert meta["rule"] == str(rule) and meta["shadow_samples"] == "8"
     scene = load_scene("pillars", ["render.width=12", "render.height=8"])
     written = read_image(out / "inscatter.exr")
-    coarse, fine = (render_reference(scene, rel_tol=1e-1, shadow_samples=8, rule=rule).inscatter for rule in (7, 15))
+    coarse, fine = (render_reference(scene, rel_tol=1e-1, shadow_samples=8, rule=r).inscatter for r in (rule, 15))
     assert np.array_equal(written, coarse.astype(written.dtype))
     assert not np.array_equal(written, fine.astype(written.dtype))
 

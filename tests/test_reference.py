@@ -10,8 +10,8 @@ from scipy import optimize
 
 from vlref.camera import camera_from_settings
 from vlref.reference.closed_forms import closest_approach, directional_homogeneous, point_light_extinction
-from vlref.reference.integrand import WG, WG3, WGK, WGK7, XGK, XGK7
-from vlref.reference.quadrature import render_reference
+from vlref.reference.integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
+from vlref.reference.quadrature import bisection_width, render_reference
 from vlref.reference.tiles import render_reference_tiled
 from vlref.scene.model import (Bounds, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings,
                                Sphere)
@@ -62,7 +62,8 @@ def test_point_light_matches_airlight_integral(g):
     assert np.allclose(res.transmittance, math.exp(-0.15 * 30.0), rtol=1e-12)
 
 
-@pytest.mark.parametrize("nodes, xgk, wgk, wg, degree", [(15, XGK, WGK, WG, 23), (7, XGK7, WGK7, WG3, 11)])
+@pytest.mark.parametrize("nodes, xgk, wgk, wg, degree", [(15, XGK, WGK, WG, 23), (7, XGK7, WGK7, WG3, 11),
+                                                      (3, XGK3, WGK3, WG1, 5)])
 def test_the_kronrod_rules_integrate_polynomials_to_their_degree_exactly(nodes, xgk, wgk, wg, degree):
     """Each rule's nodes and weights (K on all nodes; its embedded Gauss rule on the odd entries and the centre)
     integrate ``x^d`` over [-1, 1] exactly: K up to ``degree``, Gauss up to ``2 n - 1`` for its ``n`` nodes (the
@@ -82,12 +83,16 @@ def test_the_kronrod_rules_integrate_polynomials_to_their_degree_exactly(nodes, 
     assert abs(np.dot(wgs, xg ** (2 * xg.size)) - exact(2 * xg.size)) > 1e-12
 
 
-@pytest.mark.parametrize("rule", [15, 7])
-def test_tighter_tolerance_tightens_the_error(rule):
+@pytest.mark.parametrize("rule, tolerances", [(15, (1e-1, 1e-3, 1e-6, 1e-9)), (7, (1e-1, 1e-3, 1e-6, 1e-9)),
+                                              (3, (1.0, 1e-1, 1e-2, 1e-4))])
+def test_tighter_tolerance_tightens_the_error(rule, tolerances):
+    """The true error of the closed form within the reported bound, and the bound within ``rel_tol``, for each rule
+    over the tolerances it is meant for (G1–K3: the coarse end; its embedded midpoint rule makes tight tolerances
+    cost many intervals)."""
     light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
     scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
     exact = _point_exact(scene, light)
-    for tol in (1e-1, 1e-3, 1e-6, 1e-9):
+    for tol in tolerances:
         res = render_reference(scene, rel_tol=tol, abs_tol=1e-14, rule=rule)
         true = _check_bound(res, exact, tol)
         assert np.all(true <= tol * exact)
@@ -99,9 +104,10 @@ def test_the_coarse_rule_spends_fewer_evaluations_at_a_coarse_tolerance():
     bound of the closed form, as the test above checks)."""
     light = Light(type="point", position=(0.2, 1.1, 3.0), intensity=5.0, range=8.0)
     scene = _scene(Medium(scattering=0.3, absorption=0.1, anisotropy=0.3), [light])
-    fine, coarse = (render_reference(scene, rel_tol=1e-1, rule=rule) for rule in (15, 7))
+    fine, coarse, coarsest = (render_reference(scene, rel_tol=1e-1, rule=rule) for rule in (15, 7, 3))
     assert coarse.stats["intervals"] * 7 < 0.75 * fine.stats["intervals"] * 15
-    assert coarse.stats["rule"] == 7 and fine.stats["rule"] == 15
+    assert coarsest.stats["intervals"] * 3 < 0.75 * coarse.stats["intervals"] * 7
+    assert [r.stats["rule"] for r in (fine, coarse, coarsest)] == [15, 7, 3]
 
 
 def test_tiles_solve_with_the_rule_asked_for():
@@ -204,14 +210,25 @@ def _sphere_exact(scene, pixels):
     return exact
 
 
-@pytest.mark.parametrize("rule, rel_tol", [(15, 1e-4), (7, 1e-4), (7, 1e-2)])
+@pytest.mark.parametrize("rule, rel_tol", [(15, 1e-4), (7, 1e-4), (7, 1e-2), (7, 1.0), (3, 1e-2), (3, 1.0)])
 def test_sphere_shadow_boundaries_are_located(rule, rel_tol):
+    """Every shadow boundary split, the result within its bound of the closed form and the bound within ``rel_tol``;
+    at ``rel_tol = 1`` the boundaries are bisected only to ``1e-3 max(1, t)`` (:func:`bisection_width`), and their
+    term in the bound must still cover the misplacement."""
     scene, pixels = _sphere_case()
     res = render_reference(scene, rel_tol=rel_tol, rule=rule)
     assert sum(len(lit) > 1 for _, lit in pixels.values()) > 5, "the scene must cast volumetric shadows"
     exact = _sphere_exact(scene, pixels)
     true = _check_bound(res, exact, rel_tol)
     assert np.all(true <= rel_tol * exact)
+
+
+def test_boundaries_are_bisected_to_a_width_set_by_the_tolerance():
+    """The bracket's relative width: 1e-12 (a converged answer's) for every ``rel_tol <= 1e-3``, so those results
+    keep their bits, and ``1e-3 rel_tol³`` above, monotone in between."""
+    assert [bisection_width(t) for t in (1e-9, 1e-4, 1e-3)] == [1e-12] * 3
+    widths = [bisection_width(t) for t in (2e-3, 1e-2, 1e-1, 1.0)]
+    assert widths == sorted(widths) and widths[0] > 1e-12 and widths[-1] == 1e-3
 
 
 @pytest.mark.parametrize("samples", [6, 16])

@@ -68,6 +68,12 @@ XGK7 = np.array([0.960491268708020283423507092629080, 0.774596669241483377035853
 WGK7 = np.array([0.104656226026467265193823857192073, 0.268488089868333440728569280666710,
                  0.401397414775962222905051818618432, 0.450916538658474142345110087045571])
 WG3 = np.array([0.555555555555555555555555555555556, 0.888888888888888888888888888888889])
+# Gauss-Kronrod 3 nodes: the Kronrod extension of the 1-point Gauss rule (the midpoint, weight 2) is the 3-point
+# Gauss-Legendre rule itself (nodes 0, ±sqrt(3/5), weights 8/9, 5/9: Monegato 1982, SIAM Review 24, 137; exact for
+# degree <= 5, G1 for degree <= 1). The coarsest rule of vlref.reference.quadrature (``rule = 3``).
+XGK3 = np.array([0.774596669241483377035853079956480, 0.0])
+WGK3 = np.array([0.555555555555555555555555555555556, 0.888888888888888888888888888888889])
+WG1 = np.array([2.0])
 
 # per-light reference flags (float64 columns of ReferenceContext.shadows)
 R_SHADOWS, R_STRENGTH = 0, 1

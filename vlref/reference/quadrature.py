@@ -15,7 +15,8 @@ Method
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
    spaced points of the light's active interval; wherever two neighbours differ the change is
-   bisected to ``|Δt| ≤ 1e-12 · max(1, t)``. *Resolution limit*: a lit or shadowed run shorter
+   bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for every
+   ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or shadowed run shorter
    than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
    unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
    split the Gauss–Kronrod error estimate can miss it. Size the grid so that the spacing is below
@@ -32,7 +33,9 @@ Method
    ``|K7 − G3|``, the embedded G3's error, conservative in the same way: K7 is exact to degree 11,
    G3 to degree 5). At a coarse ``rel_tol`` most pixels converge on the first pass over their
    pieces, whose cost is the rule's node count: there G3–K7 halves the work; at tight tolerances
-   G7–K15 needs fewer evaluations.
+   G7–K15 needs fewer evaluations. ``rule = 3`` (G1–K3: the 3-point Gauss rule, the midpoint its embedded
+   rule, 3 evaluations; the estimate ``|K3 − G1|`` the midpoint's error) is the cheapest first pass, for
+   ``rel_tol`` of 1e-2 and coarser.
 4. **Error bound reported.** ``error = Σ_intervals err + Σ_boundaries |Δt| · max|f|`` (the second
    term bounds the misplacement of each bisected shadow boundary). ``abs_tol`` is the floor that
    keeps near-black pixels (no light reaches them) from demanding relative accuracy of zero.
@@ -56,7 +59,7 @@ from ..geometry import traversal_stack
 from ..medium import clip_to_bounds
 from ..render import prepare_frame
 from . import integrand as ig
-from .integrand import WG, WG3, WGK, WGK7, XGK, XGK7
+from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
 from ..parallel import WORKERS, borrowed, take
 from ..progress import bands_for, row_bands
 
@@ -66,9 +69,9 @@ DEFAULT_ABS_TOL = 1e-9
 
 ROUNDOFF = 50.0 * np.finfo(np.float64).eps
 
-RULES = (15, 7)
-"""The Gauss–Kronrod rules of the adaptive quadrature, by their node count: 15 (G7–K15, the default) and 7 (G3–K7,
-fewer nodes per interval for coarse tolerances; module docstring, step 3)."""
+RULES = (15, 7, 3)
+"""The Gauss–Kronrod rules of the adaptive quadrature, by their node count: 15 (G7–K15, the default), 7 (G3–K7) and 3
+(G1–K3): fewer nodes per interval for coarse tolerances (module docstring, step 3)."""
 
 # Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
 # visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
@@ -79,14 +82,16 @@ RAYS_PER_BAND = 12_500
 
 @njit(cache=True, fastmath=False)
 def gk(a, b, ray, ctx, rule):
-    """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7; :data:`RULES`) nodes
-    and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
+    """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7, 3: G1–K3;
+    :data:`RULES`) nodes and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
-    Gauss nodes are the odd ``i`` and the centre (``m`` odd for both rules), Gauss weight ``wg[i // 2]``. The sums
+    Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``. The sums
     are scalars per channel (no arrays: this is the reference's innermost loop)."""
     if rule == 7:
         xgk, wgk, wg = XGK7, WGK7, WG3
+    elif rule == 3:
+        xgk, wgk, wg = XGK3, WGK3, WG1
     else:
         xgk, wgk, wg = XGK, WGK, WG
     m = xgk.size - 1
@@ -188,10 +193,21 @@ def _same(a, b):
 
 
 @njit(cache=True, fastmath=False)
-def shadow_boundaries(light, a, b, samples, ray, ctx, out, n_out):
+def bisection_width(rel_tol):
+    """Relative width ``w`` to which a shadow boundary's bracket is bisected: ``|Δt| ≤ w max(1, t)``,
+    ``w = 1e-3 rel_tol³`` above ``rel_tol = 1e-3``, 1e-12 below. The misplacement term ``|Δt| max|f|`` of the bound (module docstring,
+    step 4) then stays far below ``rel_tol`` of a pixel whose lit run is longer than ``w t`` (1 cm at ``t = 10`` for
+    ``rel_tol = 1``), and every ``rel_tol ≤ 1e-3`` keeps the 1e-12 of a converged answer (~40 shadow rays per
+    boundary; ~10 at ``rel_tol = 1``)."""
+    return 1e-3 * rel_tol * rel_tol * rel_tol if rel_tol > 1e-3 else 1e-12
+
+
+@njit(cache=True, fastmath=False)
+def shadow_boundaries(light, a, b, samples, width, ray, ctx, out, n_out):
     """Append to ``out`` the visibility changes of ``light`` on ``[a, b]`` found on a uniform grid of
-    ``samples`` steps and bisected to ``1e-12 max(1, t)``; returns ``(n_out, Σ |Δt|)`` (the
-    remaining width of each bracket, used in the error bound)."""
+    ``samples`` steps and bisected to ``width max(1, t)`` (:func:`bisection_width`); returns ``(n_out, Σ |Δt|
+    max|f|)`` (the remaining width of each bracket times the integrand's largest value at its ends, the
+    misplacement term of the error bound)."""
     widths = 0.0
     if not b > a:
         return n_out, widths
@@ -202,7 +218,7 @@ def shadow_boundaries(light, a, b, samples, ray, ctx, out, n_out):
         v = ig.visibility(light, t, ray, ctx)
         if not _same(v, prev_v) and n_out < out.size:
             lo, hi, v_lo = prev_t, t, prev_v
-            while hi - lo > 1e-12 * max(1.0, abs(hi)):
+            while hi - lo > width * max(1.0, abs(hi)):
                 mid = 0.5 * (lo + hi)
                 if not (lo < mid < hi):
                     break
@@ -231,10 +247,11 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     n = ig.split_points(ray, 0.0, t1, ctx, cuts)
     boundary_err = 0.0
     n_geom = n
+    width = bisection_width(rel_tol)
     for light in range(ig.light_count(ctx)):
         a, b = ig.light_interval(light, ray, 0.0, t1, ctx)
         if ig.casts_shadows(light, ctx):
-            n, w = shadow_boundaries(light, a, b, shadow_samples, ray, ctx, cuts, n)
+            n, w = shadow_boundaries(light, a, b, shadow_samples, width, ray, ctx, cuts, n)
             boundary_err += w
     edges[0] = 0.0
     m = 1
@@ -254,6 +271,8 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
             edges[k] = edges[i]
             k += 1
     total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
+    # converged only where the whole bound, the boundaries' term included, is within the tolerance
+    ok = ok and err + boundary_err <= max(rel_tol * max(abs(total[0]), abs(total[1]), abs(total[2])), abs_tol)
     return total, err + boundary_err, used, ok, n - n_geom
 
 
@@ -345,9 +364,10 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     ray / ``shadow_samples`` are split at their boundaries, and the bound holds there); ``max_intervals``:
     adaptive budget per pixel; ``rows``: only the image
     rows ``y0 <= y < y1`` (a tile: pixels are independent, so its values equal those rows of the whole
-    image bit for bit; :mod:`vlref.reference.tiles`); ``rule``: the Gauss–Kronrod rule, 15 (G7–K15) or 7 (G3–K7,
+    image bit for bit; :mod:`vlref.reference.tiles`); ``rule``: the Gauss–Kronrod rule, 15 (G7–K15), 7 (G3–K7,
     half the integrand evaluations of an interval: for coarse ``rel_tol``, where most pixels converge at the first
-    pass; the reported bound is then the embedded G3's error, see docs/PHYSICS.md) (:data:`RULES`).
+    pass; the reported bound is then the embedded G3's error, see docs/PHYSICS.md) or 3 (G1–K3, 3 evaluations, the
+    bound the midpoint's error: for ``rel_tol`` 1e-2 and coarser) (:data:`RULES`).
     """
     if int(shadow_samples) < 1:
         raise ValueError(f"render_reference: shadow_samples must be at least 1, not {shadow_samples}")
