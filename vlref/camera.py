@@ -187,7 +187,7 @@ def pixel_rays(camera: Camera, width: int, height: int, threads: int | None = No
         d = np.stack([x * t * aspect, y * t, np.ones_like(x)], axis=-1) @ rotation_t
         np.divide(d, np.linalg.norm(d, axis=-1, keepdims=True), out=rays[y0:y1])
 
-    in_row_blocks(height, block, threads)
+    in_row_blocks(height, width, block, threads)
     return rays
 
 

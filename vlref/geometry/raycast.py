@@ -91,8 +91,8 @@ def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
     (:func:`vlref.row_blocks.in_row_blocks`): copies of the table's values, so the bits of ``table[object_id]``."""
     rows = np.concatenate([table, np.zeros((1, 3))])
     out = np.empty(object_id.shape + (3,))
-    in_row_blocks(object_id.shape[0], lambda y0, y1: np.take(rows, object_id[y0:y1], axis=0, out=out[y0:y1],
-                                                              mode="wrap"))
+    in_row_blocks(*object_id.shape, lambda y0, y1: np.take(rows, object_id[y0:y1], axis=0, out=out[y0:y1],
+                                                            mode="wrap"))
     return out
 
 
