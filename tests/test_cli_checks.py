@@ -323,6 +323,24 @@ def test_a_compiling_kernel_is_announced_once(capsys):
     assert err.count("vlref: compiling kernels (first run, cached afterwards") == 1
 
 
+def test_the_stage_bar_starts_no_monitor_thread():
+    """tqdm's monitor thread redraws a bar without its lock, so a redraw could follow the bar's closing and put
+    the bar's text in front of the next line printed (a note); the stage bars are moved by hand and start none."""
+    import threading
+
+    from tqdm import TMonitor
+
+    from vlref.cli.progress_bar import StageBar
+
+    def monitors():
+        return sum(isinstance(t, TMonitor) and t.is_alive() for t in threading.enumerate())
+
+    before = monitors()
+    with StageBar(False, 3, "test") as bar:
+        bar.stage("one")
+        assert bar.bar is not None and monitors() == before
+
+
 def test_a_sweep_item_that_fails_names_the_item(tmp_path, capsys):
     from vlref.cli import main
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import sys
 
 from ..progress import reporting
@@ -27,9 +28,8 @@ class StageBar:
         if self.quiet:
             return
         if self.bar is None or self.bar.unit != unit or self.bar.total != total:
-            from tqdm import tqdm
             self.close()
-            self.bar = tqdm(total=total, desc=desc, unit=unit, file=sys.stderr, delay=1.0, leave=False)
+            self.bar = _bar_class()(total=total, desc=desc, unit=unit, file=sys.stderr, delay=1.0, leave=False)
         self.bar.update(n - self.bar.n)
 
     def stage(self, name: str | None = None) -> None:
@@ -81,3 +81,18 @@ def _on_compile(callback):
             pass
 
     return OnCompile()
+
+
+@functools.cache
+def _bar_class():
+    """tqdm's bar without its monitor thread. The monitor (every 10 s) redraws a bar that has not moved for
+    ``maxinterval`` without the bar's lock, so a redraw could land after :meth:`StageBar.close` had cleared the
+    line: the next line printed (a ``vlref: note:``) then followed the bar's text on one line (seen once in a
+    test after a 23 s compile). These bars are moved by hand and need no monitor; tqdm is imported lazily (an
+    optional dependency)."""
+    from tqdm import tqdm
+
+    class StageTqdm(tqdm):
+        monitor_interval = 0
+
+    return StageTqdm
