@@ -4,7 +4,8 @@ colour's shadow rays inlined").
     python3 benchmarks/stages_ab.py OUT.json LABEL=TREE [LABEL=TREE ...]
 
 Each tree gets its own ``NUMBA_CACHE_DIR``, filled by one cold process per tree (all at once), as
-``frame_stages_ab.py`` does (its ``COLD``: ``vlref render``'s path of (b) at 320x180, the maps of cage and window). Then the trees in order and in reverse (A, B, B, A), each process running the bench's
+``frame_stages_ab.py`` does (its ``COLD``: ``vlref render``'s path of (b) at 320x180, the maps of cage and
+window). Then the trees in order and in reverse (A, B, B, A), each process running the bench's
 ``whole_render`` (a fresh ``vlref render`` of (b) at 1920x1080x64, four shadowed lights: wall and stage split),
 then in itself (medians after a warm-up call): the scene colour of (b) at 1080p (5 calls) and the march of (a) and
 (b) as the bench's ``march`` section times it (``physical.render`` of a prepared frame, 3 calls each), and SHA-256

@@ -35,9 +35,9 @@ def parser() -> argparse.ArgumentParser:
                    help="target relative error per pixel (default: 1e-4)")
     p.add_argument("--shadow-samples", type=_grid_size, default=512, metavar="N",
                    help="shadow-boundary grid per light and pixel: every lit or shadowed run along a pixel ray longer "
-                        "than its light interval / N is split at its exact boundaries (bisected to 1e-12 of the distance, "
-                        "1e-3 --rel-tol^3 above --rel-tol 1e-3, the bracket's width in the error estimate); shorter "
-                        "ones are still integrated, but the error estimate may miss them (default: 512)")
+                        "than its light interval / N is split at its exact boundaries (bisected to 1e-12 of the "
+                        "distance, 1e-3 --rel-tol^3 above --rel-tol 1e-3, the bracket's width in the error estimate); "
+                        "shorter ones are still integrated, but the error estimate may miss them (default: 512)")
     p.add_argument("--rule", type=int, choices=RULES, default=15,
                    help="Gauss-Kronrod rule of the adaptive quadrature by its nodes: 15 (G7-K15), 7 (G3-K7: half the "
                         "evaluations per interval, for a coarse --rel-tol; the error estimate is then the embedded "

@@ -15,9 +15,9 @@ Method
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
    spaced points of the light's active interval; wherever two neighbours differ the change is
-   bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for every
-   ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or shadowed run shorter
-   than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
+   bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for
+   every ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or
+   shadowed run shorter than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
    unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
    split the Gauss–Kronrod error estimate can miss it. Size the grid so that the spacing is below
    the thinnest shadow feature along a ray (default 512 samples: 2 cm on a 10 m light volume).
@@ -70,8 +70,8 @@ DEFAULT_ABS_TOL = 1e-9
 ROUNDOFF = 50.0 * np.finfo(np.float64).eps
 
 RULES = (15, 7, 3)
-"""The Gauss–Kronrod rules of the adaptive quadrature, by their node count: 15 (G7–K15, the default), 7 (G3–K7) and 3
-(G1–K3): fewer nodes per interval for coarse tolerances (module docstring, step 3)."""
+"""The Gauss–Kronrod rules of the adaptive quadrature, by their node count: 15 (G7–K15, the default), 7 (G3–K7)
+and 3 (G1–K3): fewer nodes per interval for coarse tolerances (module docstring, step 3)."""
 
 # Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
 # visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
@@ -83,11 +83,12 @@ RAYS_PER_BAND = 12_500
 @njit(cache=True, fastmath=False)
 def gk(a, b, ray, ctx, rule):
     """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7, 3: G1–K3;
-    :data:`RULES`) nodes and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term, QUADPACK's, covers rounding).
+    :data:`RULES`) nodes and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term,
+    QUADPACK's, covers rounding).
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
-    Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``. The sums
-    are scalars per channel (no arrays: this is the reference's innermost loop)."""
+    Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``.
+    The sums are scalars per channel (no arrays: this is the reference's innermost loop)."""
     if rule == 7:
         xgk, wgk, wg = XGK7, WGK7, WG3
     elif rule == 3:
@@ -195,10 +196,10 @@ def _same(a, b):
 @njit(cache=True, fastmath=False)
 def bisection_width(rel_tol):
     """Relative width ``w`` to which a shadow boundary's bracket is bisected: ``|Δt| ≤ w max(1, t)``,
-    ``w = 1e-3 rel_tol³`` above ``rel_tol = 1e-3``, 1e-12 below. The misplacement term ``|Δt| max|f|`` of the bound (module docstring,
-    step 4) then stays far below ``rel_tol`` of a pixel whose lit run is longer than ``w t`` (1 cm at ``t = 10`` for
-    ``rel_tol = 1``), and every ``rel_tol ≤ 1e-3`` keeps the 1e-12 of a converged answer (~40 shadow rays per
-    boundary; ~10 at ``rel_tol = 1``)."""
+    ``w = 1e-3 rel_tol³`` above ``rel_tol = 1e-3``, 1e-12 below. The misplacement term ``|Δt| max|f|`` of the
+    bound (module docstring, step 4) then stays far below ``rel_tol`` of a pixel whose lit run is longer than
+    ``w t`` (1 cm at ``t = 10`` for ``rel_tol = 1``), and every ``rel_tol ≤ 1e-3`` keeps the 1e-12 of a converged
+    answer (~40 shadow rays per boundary; ~10 at ``rel_tol = 1``)."""
     return 1e-3 * rel_tol * rel_tol * rel_tol if rel_tol > 1e-3 else 1e-12
 
 
