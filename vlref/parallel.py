@@ -26,7 +26,8 @@ generates machine code for each module it builds, callees included: a ``prange``
 gufunc, its two wrappers, the kernel), so the work's call tree was optimised and code-generated four more
 times in every parallel kernel (a cold compile of the march: 4.9 s of its 12 s of LLVM; BENCHMARKS.md "Cold first
 render on two cores, second round"). The kernels take the work as an argument instead, a Numba first-class
-function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types): the
+function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types; the work
+function is declared ``vlref.jit.njit(..., by_address=True)``, which compiles that wrapper and no CPython one): the
 shell calls it through that address, and only the work's own module holds its code. The work runs its own
 module's machine code (optimised once instead of again in every caller: IEEE arithmetic either way, the same
 bits), one indirect call per worker. The work borrows its arrays itself (a ``borrowed`` tuple in the ``prange``
@@ -115,6 +116,9 @@ class Work(WrapperAddressProtocol):
         self._sig = sig
         result = function.get_compile_result(sig)  # compiles or loads from the cache now, not while unboxing
         self._address = result.library.get_pointer_to_function(result.fndesc.llvm_cfunc_wrapper_name)
+        if not self._address:  # a call through it would jump to address 0
+            raise TypeError(f"work: {function.py_func.__qualname__} has no C wrapper: compile it with "
+                            "vlref.jit.njit(..., by_address=True)")
 
     def __wrapper_address__(self) -> int:
         return self._address

@@ -53,9 +53,10 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import traversal_stack
+from ..jit import njit
 from ..medium import clip_to_bounds
 from ..render import prepare_frame
 from . import integrand as ig
@@ -319,7 +320,8 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     used = np.zeros((h, w), dtype=np.int64)
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
-    taken = np.zeros(1, dtype=np.int64)
+    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
+    taken[0] = 0
     for _ in prange(WORKERS):
         o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
                                                     (out, trans, err, used, ok, shadow_edges)))
