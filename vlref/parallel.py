@@ -38,22 +38,36 @@ is printed, not propagated (the kernels check their arguments before the ``prang
 from __future__ import annotations
 
 import numba
+import numpy as np
 from numba.core import cgutils, types
 from numba.core.errors import TypingError
 from numba.core.types.function_type import WrapperAddressProtocol
 from numba.core.typing import signature
 from numba.extending import intrinsic
 
+from .jit import njit
+
 try:  # Numba's own typing cache key: what its dispatcher looks up a value's type by, in C (~0.2 µs)
     from numba._dispatcher import compute_fingerprint
 except ImportError:  # a Numba without it: the key is the type itself
     compute_fingerprint = None
 
-__all__ = ["WORKERS", "COUNTER", "take", "borrowed", "Work", "work"]
+__all__ = ["WORKERS", "COUNTER", "task_counter", "take", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
 COUNTER = types.Array(types.int64, 1, "C")
 """The Numba type of the task counter of :func:`take` (``np.zeros(1, dtype=np.int64)``), for :func:`work`."""
+
+
+@njit(cache=True, fastmath=False)
+def task_counter():
+    """A new task counter for :func:`take` (a 1-element int64 array holding 0). A kernel calls it rather than
+    writing ``np.zeros(1, dtype=np.int64)``: in a ``parallel=True`` function Numba turns ``np.zeros`` into a parfor
+    of its own, one more gufunc to compile per kernel (BENCHMARKS.md "A cold render compiles fewer wrappers and
+    parfors"), while a call is compiled once, here, without ``parallel``."""
+    counter = np.empty(1, dtype=np.int64)
+    counter[0] = 0
+    return counter
 
 
 @intrinsic

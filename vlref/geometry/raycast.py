@@ -38,7 +38,7 @@ from numba import prange
 
 from ..camera import Camera
 from ..jit import njit
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
@@ -186,8 +186,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
     """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
     :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 

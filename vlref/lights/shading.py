@@ -32,7 +32,7 @@ from numba import prange
 from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..jit import njit
 from ..numeric import cast
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
 from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
@@ -165,8 +165,7 @@ def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj
     :func:`vlref.parallel.work`), which borrows the arrays (as the G-buffer's ray cast does,
     :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads counting references to the same
     geometry arrays on every shadow ray contend for their counters)."""
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
                    ambient, sky, out)

@@ -28,7 +28,7 @@ from numba import prange
 from ..camera import Camera
 from ..geometry import EVERY_SURFACE, OPAQUE_ONLY, RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
 from ..jit import njit
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_POINT, KIND_SPOT, PackedLights)
 from .shadow_pack import (CUBE_AXES, CUBE_FACES, FILTER_MODES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
@@ -138,8 +138,7 @@ def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint, ca
     none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour.
     Every worker casts the chunks it takes (``cast_chunks``: :func:`_cast_chunks` by address,
     :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out, tint)
 

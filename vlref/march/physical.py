@@ -120,7 +120,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..phase import hg
 from .segments import light_segment
 
@@ -681,8 +681,7 @@ def _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, 
                 raise ValueError("march_physical: a light has exact shadows, and geo is None")
     if not 0 <= rows[0] <= rows[1] <= t_end.shape[0]:
         raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights,
                     shadows, geo, per_light, transmittance)

@@ -30,7 +30,7 @@ from numba import prange
 
 from vlref.jit import njit
 from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
-from vlref.parallel import WORKERS, borrowed, take
+from vlref.parallel import WORKERS, borrowed, take, task_counter
 from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
@@ -237,8 +237,7 @@ def _radial_tiles(img, H, W, loop, mode):
     out = np.empty((H, W, img.shape[2]))
     bands = (W + RADIAL_TILE - 1) // RADIAL_TILE
     tile_w = (W + bands - 1) // bands
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         im, o = borrowed((img, out))
         _radial_tasks(im, H, W, loop, mode, tile_w, taken, o)

@@ -61,7 +61,7 @@ from ..medium import clip_to_bounds
 from ..render import prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import WORKERS, borrowed, take, task_counter
 from ..progress import bands_for, row_bands
 
 __all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
@@ -320,8 +320,7 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     used = np.zeros((h, w), dtype=np.int64)
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
-    taken = np.empty(1, dtype=np.int64)  # not np.zeros: under parallel=True that is a parfor of its own
-    taken[0] = 0
+    taken = task_counter()
     for _ in prange(WORKERS):
         o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
                                                     (out, trans, err, used, ok, shadow_edges)))
