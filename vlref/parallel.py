@@ -56,7 +56,7 @@ __all__ = ["WORKERS", "COUNTER", "task_counter", "take", "borrowed", "Work", "wo
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
 COUNTER = types.Array(types.int64, 1, "C")
-"""The Numba type of the task counter of :func:`take` (``np.zeros(1, dtype=np.int64)``), for :func:`work`."""
+"""The Numba type of the task counter of :func:`take` (:func:`task_counter`), for :func:`work`."""
 
 
 @njit(cache=True, fastmath=False)
