@@ -6,7 +6,7 @@ from hypothesis import given, settings
 
 from post_cases import image, sizes
 from vlref.post.composite import (blend_add_fp16, composite_add, composite_physical, composite_urp, composite_vl,
-                                  fp16, sum_lights, unorm8, unorm16)
+                                  fp16, sum_and_composite, unorm8, unorm16)
 
 
 @given(sizes(2, 8))
@@ -33,12 +33,14 @@ def test_composites_per_pixel(case):
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("n", [0, 1, 2, 4])
-def test_sum_lights_adds_in_light_order(n, dtype):
+def test_sum_and_composite_adds_in_light_order_and_composites_the_sum(n, dtype):
     """The sum of the lights' in-scattering: ((L_0 + L_1) + L_2) + ... in the buffers' precision, element by
-    element (the same bits as NumPy's sum over the first axis); zeros without lights."""
+    element (the same bits as NumPy's sum over the first axis); zeros without lights. The final image: the same
+    bits as composite_physical of that sum (float64, float32 buffers promoted per element)."""
     rng = np.random.default_rng(n)
     per_light = (rng.random((n, 7, 5, 3)) * 10.0 ** rng.integers(-8, 8, (n, 7, 5, 3))).astype(dtype)
-    got = sum_lights(per_light)
+    scene, trans = rng.random((7, 5, 3)), rng.random((7, 5)).astype(dtype)
+    got, final = sum_and_composite(scene, trans, per_light)
     assert got.dtype == dtype and got.shape == (7, 5, 3)
     want = np.zeros((7, 5, 3), dtype)
     if n:
@@ -47,6 +49,9 @@ def test_sum_lights_adds_in_light_order(n, dtype):
             want = want + per_light[k]
     assert got.tobytes() == want.tobytes()
     assert got.tobytes() == per_light.sum(axis=0).tobytes()
+    assert final.dtype == np.float64
+    assert final.tobytes() == (scene * trans[:, :, None] + want).tobytes()
+    assert final.tobytes() == composite_physical(scene, trans, want).tobytes()
 
 
 def test_composite_physical_promotes_float32_buffers():
