@@ -5,15 +5,19 @@ of vlref is made by it."""
 
 import ast
 import math
+import sys
 from pathlib import Path
 
 import numba
 import numpy as np
 import pytest
 from numba import prange
+from numba.core.registry import CPUDispatcher
 
 import vlref
 from vlref.phase import hg
+from vlref.render import render
+from vlref.scene import load_scene
 from vlref.jit import njit
 from vlref.parallel import COUNTER, WORKERS, take, task_counter, work
 
@@ -33,10 +37,10 @@ def _fill(taken, out):
         out[i] = math.sqrt(i)
 
 
-def _entry(dispatcher, name):
-    """The address of ``dispatcher``'s only compiled function's entry point ``name`` (a fndesc attribute), 0 if
-    it was not compiled."""
-    result = dispatcher.overloads[dispatcher.signatures[0]]
+def _entry(dispatcher, name, sig=None):
+    """The address of the entry point ``name`` (a fndesc attribute) of ``dispatcher``'s function compiled for
+    ``sig`` (default: its first), 0 if it was not compiled."""
+    result = dispatcher.overloads[sig or dispatcher.signatures[0]]
     return result.library.get_pointer_to_function(getattr(result.fndesc, name))
 
 
@@ -95,3 +99,20 @@ def test_every_compiled_function_of_vlref_is_made_by_vlref_jit():
                     isinstance(node.value, ast.Name) and node.value.id == "numba":
                 found.append(f"{path.relative_to(root)}:{node.lineno}")
     assert not found
+
+
+def test_a_render_compiles_a_c_wrapper_for_the_work_functions_only():
+    """After a render of the default scene, every compiled function of vlref has its CPython entry point and no C
+    wrapper, but the work functions of the parallel kernels, which have their C wrapper and no CPython entry."""
+    render(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
+    compiled = {value.py_func.__qualname__: value for name, module in list(sys.modules.items())
+                if name.startswith("vlref.") for value in vars(module).values()
+                if isinstance(value, CPUDispatcher) and value.signatures}
+    by_address = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
+    assert by_address | {"_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite",
+                         "task_counter"} <= set(compiled)
+    for name, dispatcher in compiled.items():
+        for sig in dispatcher.signatures:
+            c_wrapper = bool(_entry(dispatcher, "llvm_cfunc_wrapper_name", sig))
+            python_entry = bool(_entry(dispatcher, "llvm_cpython_wrapper_name", sig))
+            assert (c_wrapper, python_entry) == ((True, False) if name in by_address else (False, True)), name
