@@ -49,7 +49,7 @@ from .lights import pack_lights
 from .lights.shading import _shade, scene_colour
 from .lights.shadow_cast import _cast_face, build_shadow_maps
 from .march.physical import _march_kernel
-from .post.composite import composite_physical, sum_lights
+from .post.composite import sum_and_composite
 from .processes import host_cores, ignoring_sigint
 from .reference import render_reference
 from .render import prepare_frame, render
@@ -183,7 +183,7 @@ def compile_stage(stage: str, scene) -> None:
         maps = build_shadow_maps(bare, camera, geometry, lights)
         per_light, trans = march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
                                          resolved(scene, "steps"), resolved(scene, "sampling"))
-        composite_physical(np.zeros((1, 1, 3)), trans, sum_lights(per_light))
+        sum_and_composite(per_light, np.zeros((1, 1, 3)), trans)
 
 
 def _march_wanted(dtype, rays: bool):
