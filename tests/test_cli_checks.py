@@ -259,6 +259,19 @@ def test_the_command_table_imports_nothing_heavy():
     assert out.strip() == "[]"
 
 
+def test_the_render_command_imports_neither_the_reference_nor_the_warmup():
+    # a fresh `vlref render` imports its command's modules at start-up: the quadrature reference (its kernels'
+    # dispatchers) and the warm-up's task list are not among them (vlref.ahead compiles a cold render's stages)
+    import subprocess
+    import sys
+
+    code = ("import sys; from vlref.cli.commands import program_command; program_command('render').render_to_folder; "
+            "print(sorted(m for m in sys.modules if m.startswith(('vlref.reference', 'vlref.warmup'))), "
+            "'vlref.render' in sys.modules, 'vlref.ahead' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[] True True"
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene
