@@ -1,0 +1,26 @@
+#!/bin/bash
+# The whole `vlref render` of (b), main against a branch on one device machine, each tree with its own Numba cache
+# (BENCHMARKS.md, "One pass for the lights' sum and the composite; the render without the reference"). Run in the
+# lead's checkout on the device with .dev/MAIN and .dev/BRANCH carried:
+#     bash .dev/BRANCH/benchmarks/whole_render_device.sh MAIN BRANCH PAIRS
+# 1. everything the processes import byte-compiled into PYTHONPYCACHEPREFIX (the device's NumPy has no .pyc files);
+# 2. benchmarks/whole_render_ab.py: both caches filled, PAIRS rounds of main, branch, branch, main, the outputs hashed;
+# 3. benchmarks/volumetric_pieces.py in a fresh process of each tree (3 renders each).
+set -e
+MAIN=$1 BRANCH=$2 PAIRS=${3:-4}
+python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
+export PYTHONPATH=/tmp/site LD_LIBRARY_PATH=$PWD/.device-libs/lib:$LD_LIBRARY_PATH XDG_RUNTIME_DIR=/tmp \
+       PYTHONUNBUFFERED=1 PYTHONPYCACHEPREFIX=/tmp/pyc
+ROOT=$PWD
+SP=$(python3 -c "import numpy,os;print(os.path.dirname(os.path.dirname(numpy.__file__)))")
+STD=$(python3 -c "import sysconfig;print(sysconfig.get_paths()['stdlib'])")
+python3 -m compileall -q -j 0 $SP/numpy $SP/numba $SP/llvmlite $SP/scipy $SP/yaml $STD $ROOT/.dev/$MAIN/vlref \
+    $ROOT/.dev/$BRANCH/vlref /tmp/site > /dev/null 2>&1 || true
+lscpu | grep -E "Model name|^CPU\(s\)|Thread" ; nproc; python3 -c "import sys, numba, numpy; print(sys.version, numba.__version__, numpy.__version__)"
+python3 $ROOT/.dev/$BRANCH/benchmarks/whole_render_ab.py $OUT $PAIRS $ROOT/.dev/$MAIN $ROOT/.dev/$BRANCH /tmp/wrab
+for t in main:$MAIN:a branch:$BRANCH:b; do
+    IFS=: read label tree cache <<< "$t"
+    echo "== volumetric pieces, $label"
+    (cd $ROOT/.dev/$tree && PYTHONPATH=$ROOT/.dev/$tree:/tmp/site NUMBA_CACHE_DIR=/tmp/wrab/$cache \
+        python3 $ROOT/.dev/$BRANCH/benchmarks/volumetric_pieces.py 3) | tee $OUT/pieces_$label.txt
+done
