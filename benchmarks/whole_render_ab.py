@@ -47,7 +47,7 @@ render_to_folder = program_command("render").render_to_folder
 from vlref.bench import bench_scene
 if __name__ == "__main__":
     with tempfile.TemporaryDirectory() as d:
-        result, _, _, _ = render_to_folder(bench_scene(1920, 1080, 64, "four", 1024), d + "/out")
+        result, _, _, _ = render_to_folder(bench_scene(1920, 1080, 64, "four", 1024), d + "/out", stages=True)
         out = {"buffer " + k: hashlib.sha256(v.tobytes()).hexdigest()[:16] for k, v in sorted(result.buffers.items())}
         out.update({"file " + p.name: hashlib.sha256(p.read_bytes()).hexdigest()[:16]
                     for p in sorted(pathlib.Path(d, "out").iterdir())})
