@@ -5,7 +5,7 @@
 #     bash .dev/BRANCH/benchmarks/whole_render_device.sh MAIN BRANCH PAIRS
 # 1. everything the processes import byte-compiled into PYTHONPYCACHEPREFIX (the device's NumPy has no .pyc files);
 # 2. benchmarks/whole_render_ab.py: both caches filled, PAIRS rounds of main, branch, branch, main, the outputs hashed;
-# 3. benchmarks/volumetric_pieces.py in a fresh process of each tree (3 renders each).
+# 3. benchmarks/volumetric_pieces.py in a fresh process of each tree (3 renders each);
 set -e
 MAIN=$1 BRANCH=$2 PAIRS=${3:-4}
 python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
@@ -24,3 +24,13 @@ for t in main:$MAIN:a branch:$BRANCH:b; do
     (cd $ROOT/.dev/$tree && PYTHONPATH=$ROOT/.dev/$tree:/tmp/site NUMBA_CACHE_DIR=/tmp/wrab/$cache \
         python3 $ROOT/.dev/$BRANCH/benchmarks/volumetric_pieces.py 3) | tee $OUT/pieces_$label.txt
 done
+# 4. the render command's import alone, fresh processes alternated (main, branch) x 6
+IMP='import time; t0 = time.perf_counter()
+from vlref.cli.commands import program_command
+program_command("render").render_to_folder
+import sys; print(round(time.perf_counter() - t0, 4), len([m for m in sys.modules if m.startswith("vlref")]))'
+for i in 1 2 3 4 5 6; do
+    for t in $MAIN $BRANCH; do
+        echo "import $t $(cd /tmp && PYTHONPATH=$ROOT/.dev/$t:/tmp/site python3 -c "$IMP")"
+    done
+done | tee $OUT/import_ab.txt
