@@ -5,7 +5,7 @@
 #     bash .dev/BRANCH/benchmarks/whole_render_device.sh MAIN BRANCH PAIRS ROUNDS
 # 1. everything the processes import byte-compiled into PYTHONPYCACHEPREFIX (the device's NumPy has no .pyc files);
 # 2. benchmarks/whole_render_ab.py: both caches filled, PAIRS rounds of main, branch, branch, main, the outputs hashed;
-# 3. benchmarks/volumetric_pieces.py, one render in a fresh process, ROUNDS times main, branch, and the branch with
+# 3. benchmarks/volumetrics_fresh.py, one render in a fresh process, ROUNDS times main, branch, and the branch with
 #    glibc's malloc asking for transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1);
 set -e
 MAIN=$1 BRANCH=$2 PAIRS=${3:-4} ROUNDS=${4:-3}
@@ -25,7 +25,7 @@ for i in $(seq $ROUNDS); do
         TUNE=$([ $label = hugetlb ] && echo glibc.malloc.hugetlb=1 || echo "")
         echo "== volumetric pieces, $label, fresh process $i"
         (cd $ROOT/.dev/$tree && GLIBC_TUNABLES=$TUNE PYTHONPATH=$ROOT/.dev/$tree:/tmp/site \
-            NUMBA_CACHE_DIR=/tmp/wrab/$cache python3 $ROOT/.dev/$BRANCH/benchmarks/volumetric_pieces.py 1) | tail -2
+            NUMBA_CACHE_DIR=/tmp/wrab/$cache python3 $ROOT/.dev/$BRANCH/benchmarks/volumetrics_fresh.py 1) | tail -2
     done
 done | tee $OUT/pieces.txt
 # 4. the render command's import alone, fresh processes alternated (main, branch) x 10
