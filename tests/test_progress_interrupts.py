@@ -309,15 +309,15 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
     from vlref.lights.shading import _shade_rows
     from vlref.lights.shadow_cast import _cast_chunks
     from vlref.march.physical import _march_tasks
-    from vlref.post.composite import _composite, _sum_lights
-    from vlref.warmup import AHEAD, compile_stage, stage_cached
+    from vlref.post.composite import _sum_composite
+    from vlref.ahead import AHEAD, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
     called = {stage: set(kernel.signatures) for stage, (_, kernel) in AHEAD.items()}
     for stage, (_, kernel) in AHEAD.items():
         assert all(isinstance(sig[-1], types.FunctionType) for sig in kernel.signatures), stage  # work by address
-    also = (_composite, _sum_lights, _march_tasks, _cast_chunks, _cast_rows, _shade_rows)  # the march's, the work
+    also = (_sum_composite, _march_tasks, _cast_chunks, _cast_rows, _shade_rows)  # the march's, the work
     after_march = {kernel: set(kernel.signatures) for kernel in also}
     for stage, (_, kernel) in AHEAD.items():
         compile_stage(stage, scene)

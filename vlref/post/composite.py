@@ -92,6 +92,37 @@ def _sum_lights(per_light, out):
             out[i, j] = acc
 
 
+def sum_and_composite(per_light: np.ndarray, scene, transmittance) -> tuple[np.ndarray, np.ndarray]:
+    """``(inscatter, final)``: :func:`sum_lights` of ``per_light`` (n, H, W, 3) and :func:`composite_physical` of
+    ``scene``, ``transmittance`` and that sum, the same bits as the two calls, in one parallel pass over the rows
+    (one kernel to load in a fresh process instead of two, the sum read back from registers, not memory)."""
+    per_light = np.ascontiguousarray(per_light)
+    scene = np.ascontiguousarray(scene, dtype=np.float64)
+    if per_light.shape[0] == 0:
+        inscatter = sum_lights(per_light)
+        return inscatter, composite_physical(scene, transmittance, inscatter)
+    if per_light.shape[1:] != scene.shape:
+        raise ValueError(f"inscatter: shape {per_light.shape[1:]} does not match image {scene.shape}")
+    trans = _check_per_pixel(_floats(transmittance), scene)
+    inscatter = np.empty(scene.shape, dtype=per_light.dtype)
+    final = np.empty(scene.shape)
+    _sum_composite(per_light, scene, trans, inscatter, final)
+    return inscatter, final
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _sum_composite(per_light, scene, trans, inscatter, final):
+    n, h, w, c = per_light.shape
+    for i in prange(h):
+        for j in range(w):
+            for k in range(c):
+                acc = per_light[0, i, j, k]  # in the buffers' dtype, lights in order (as _sum_lights)
+                for m in range(1, n):
+                    acc += per_light[m, i, j, k]
+                inscatter[i, j, k] = acc
+                final[i, j, k] = scene[i, j, k] * trans[i, j] + acc  # as _composite, reading the stored sum
+
+
 def composite_vl(scene, volume) -> np.ndarray:
     """VolumetricLights' ``BlitAdd`` (SOURCES §1.11): ``rgb = scene_rgb * V_a + V_rgb``, ``a = scene_a * V_a``.
 

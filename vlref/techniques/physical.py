@@ -21,7 +21,7 @@ import numpy as np
 from ..march.patterns import offsets
 from ..march.physical import TILE_H, march_physical
 from ..medium import pack_medium
-from ..post.composite import composite_physical, sum_lights
+from ..post.composite import sum_and_composite
 from ..progress import bands_for, row_bands
 from ..scene.technique_params import resolved
 
@@ -69,8 +69,7 @@ def render(scene, frame) -> dict[str, np.ndarray]:
     """``inscatter``, ``transmittance``, ``final`` and ``inscatter_light_<i>`` (module docstring)."""
     per_light, trans = march_buffers(scene, frame.camera, frame.gbuffer.distance, frame.lights, frame.shadow_maps(),
                                      frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
-    inscatter = sum_lights(per_light)
-    out = {"inscatter": inscatter, "transmittance": trans,
-           "final": composite_physical(frame.scene_colour, trans, inscatter)}
+    inscatter, final = sum_and_composite(per_light, frame.scene_colour, trans)
+    out = {"inscatter": inscatter, "transmittance": trans, "final": final}
     out.update({f"inscatter_light_{k}": per_light[k] for k in range(per_light.shape[0])})
     return out
