@@ -16,7 +16,7 @@ from vlref.render import render
 
 WRAPPED = {"vlref.geometry.raycast": ("_raycast_kernel", "_per_object"), "vlref.lights.shading": ("_shade",),
            "vlref.lights.shadow_cast": ("_cast_face",),
-           "vlref.techniques.physical": ("march_physical", "sum_lights", "composite_physical", "offsets")}
+           "vlref.techniques.physical": ("march_physical", "sum_and_composite", "offsets")}
 
 
 def timed(f, name, log):

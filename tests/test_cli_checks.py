@@ -259,6 +259,28 @@ def test_the_command_table_imports_nothing_heavy():
     assert out.strip() == "[]"
 
 
+def test_the_render_command_imports_only_its_own_technique():
+    # a fresh `vlref render` imports its command's modules at start-up: the other techniques' passes and kernels
+    # (the registry imports a technique's module on first use), the quadrature reference and the warm-up's task
+    # list are not among them (vlref.ahead compiles a cold render's stages)
+    import subprocess
+    import sys
+
+    others = ("vlref.reference", "vlref.warmup", "vlref.froxel", "vlref.post.blur", "vlref.post.radial",
+              "vlref.post.upsample", "vlref.march.urp", "vlref.march.killzone", "vlref.march.slightlymad",
+              *(f"vlref.techniques.{t}" for t in ("froxel", "killzone", "radial", "slightlymad", "urp")))
+    code = ("import sys; from vlref.cli.commands import program_command; program_command('render').render_to_folder; "
+            f"print(sorted(m for m in sys.modules if m.startswith({others!r})), "
+            "all(m in sys.modules for m in ('vlref.render', 'vlref.ahead', 'vlref.techniques.physical')))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[] True"
+    # the registry imports a technique's module when its render, rule or notes are asked for
+    code = ("import sys; from vlref.techniques import TECHNIQUES; a = 'vlref.techniques.radial' in sys.modules; "
+            "rule = TECHNIQUES['radial'].applies; print(a, rule.__module__, TECHNIQUES['froxel'].notes.__module__)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.split() == ["False", "vlref.techniques.radial", "vlref.techniques.froxel"]
+
+
 def test_scenes_lists_the_techniques_that_apply_to_each_scene(capsys):
     from vlref.cli import main
     from vlref.scene import bundled_scenes, load_scene

@@ -6,7 +6,7 @@ from hypothesis import given, settings
 
 from post_cases import image, sizes
 from vlref.post.composite import (blend_add_fp16, composite_add, composite_physical, composite_urp, composite_vl,
-                                  fp16, sum_and_composite, unorm8, unorm16)
+                                  fp16, sum_and_composite, sum_lights, unorm8, unorm16)
 
 
 @given(sizes(2, 8))
@@ -33,14 +33,12 @@ def test_composites_per_pixel(case):
 
 @pytest.mark.parametrize("dtype", [np.float64, np.float32])
 @pytest.mark.parametrize("n", [0, 1, 2, 4])
-def test_sum_and_composite_adds_in_light_order_and_composites_the_sum(n, dtype):
+def test_sum_lights_adds_in_light_order(n, dtype):
     """The sum of the lights' in-scattering: ((L_0 + L_1) + L_2) + ... in the buffers' precision, element by
-    element (the same bits as NumPy's sum over the first axis); zeros without lights. The final image: the same
-    bits as composite_physical of that sum (float64, float32 buffers promoted per element)."""
+    element (the same bits as NumPy's sum over the first axis); zeros without lights."""
     rng = np.random.default_rng(n)
     per_light = (rng.random((n, 7, 5, 3)) * 10.0 ** rng.integers(-8, 8, (n, 7, 5, 3))).astype(dtype)
-    scene, trans = rng.random((7, 5, 3)), rng.random((7, 5)).astype(dtype)
-    got, final = sum_and_composite(scene, trans, per_light)
+    got = sum_lights(per_light)
     assert got.dtype == dtype and got.shape == (7, 5, 3)
     want = np.zeros((7, 5, 3), dtype)
     if n:
@@ -49,9 +47,24 @@ def test_sum_and_composite_adds_in_light_order_and_composites_the_sum(n, dtype):
             want = want + per_light[k]
     assert got.tobytes() == want.tobytes()
     assert got.tobytes() == per_light.sum(axis=0).tobytes()
-    assert final.dtype == np.float64
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+@pytest.mark.parametrize("n", [0, 1, 4])
+def test_sum_and_composite_has_the_bits_of_the_sum_then_the_composite(n, dtype):
+    """The physical technique's one pass: NumPy's sum over the lights (in light order, in the buffers' dtype) and
+    ``scene * T + sum`` in float64, bit for bit, over magnitudes 1e-8..1e8; zeros and ``scene * T`` without lights."""
+    rng = np.random.default_rng(10 + n)
+    per_light = (rng.random((n, 9, 7, 3)) * 10.0 ** rng.integers(-8, 8, (n, 9, 7, 3))).astype(dtype)
+    scene, trans = rng.random((9, 7, 3)) * 10.0, rng.random((9, 7)).astype(dtype)
+    inscatter, final = sum_and_composite(per_light, scene, trans)
+    want = per_light.sum(axis=0) if n else np.zeros((9, 7, 3), dtype)
+    assert inscatter.dtype == dtype and final.dtype == np.float64
+    assert inscatter.tobytes() == want.tobytes()
     assert final.tobytes() == (scene * trans[:, :, None] + want).tobytes()
-    assert final.tobytes() == composite_physical(scene, trans, want).tobytes()
+    assert final.tobytes() == composite_physical(scene, trans, sum_lights(per_light)).tobytes()
+    with pytest.raises(ValueError, match="does not match"):
+        sum_and_composite(np.zeros((2, 9, 6, 3), dtype), scene, trans)
 
 
 def test_composite_physical_promotes_float32_buffers():

@@ -31,7 +31,8 @@ The package is laid out as the pipeline it computes::
     bench/      ``vlref bench``: throughput of every stage, by section
     processes.py child processes that leave Ctrl-C to vlref; the cores this process may use
     progress.py long kernels run band by band of rows: progress reports, Ctrl-C between bands
-    warmup.py   compile every kernel once (``vlref warmup``); a cold render's later stages compiled ahead
+    warmup.py   compile every kernel once (``vlref warmup``)
+    ahead.py    a cold render's later stages compiled ahead in second processes
 """
 
 __version__ = "0.1.0"

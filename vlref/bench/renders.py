@@ -131,7 +131,7 @@ def bench_whole_render(cfg: BenchConfig) -> dict:
 
 def bench_first_render(cfg: BenchConfig) -> dict:
     """A fresh process renders (a) and writes its outputs as ``vlref render`` does (its compile spread over
-    processes: :func:`vlref.warmup.compile_ahead`): with a fresh cache, then with the cache it filled
+    processes: :func:`vlref.ahead.compile_ahead`): with a fresh cache, then with the cache it filled
     (``cold_cache``), else only with this process's cache (warm; ``cold`` is then None)."""
     w, h = cfg.first_render
     if not cfg.cold_cache:

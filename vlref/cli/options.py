@@ -10,7 +10,7 @@ from ..memory import check_memory
 from ..scene import load_scene
 from ..scene.model import TECHNIQUES
 from ..techniques import APPLIES
-from ..techniques.urp import main_light
+from ..techniques.main_light import main_light
 
 __all__ = ["add_scene_arguments", "add_scheduler_argument", "technique_names", "load_scene_checked",
            "preview_exposure"]

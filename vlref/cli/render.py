@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+from ..ahead import compile_ahead
 from ..errors import InputError
 from ..io.files import write_bytes
 from ..io.output_folders import output_dir
@@ -19,7 +20,6 @@ from ..render import render
 from ..sequence import parse_frames, write_sequence
 from ..sheet import contact_sheet, inscatter_level, labelled
 from ..techniques import TECHNIQUES
-from ..warmup import compile_ahead
 from .options import add_scene_arguments, load_scene_checked, preview_exposure, technique_names, technique_rules
 from .progress_bar import StageBar
 

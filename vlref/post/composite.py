@@ -69,38 +69,59 @@ def _composite(scene, trans, light, out):
                 out[i, j, k] = scene[i, j, k] * trans[i, j] + light[i, j, k]
 
 
-def sum_and_composite(scene, transmittance, per_light) -> tuple[np.ndarray, np.ndarray]:
-    """``(L, final)``: the lights' sum ``L = Σ_k per_light[k]`` (``per_light`` (n, H, W, 3), in light order
-    ``((L_0 + L_1) + L_2) + …``, in the buffers' dtype: the same bits as NumPy's ``per_light.sum(axis=0)``; zeros
-    without lights) and :func:`composite_physical` of it over ``scene`` (the same bits), in one kernel: rows in
-    parallel, each pixel summed once and composited at once. One kernel to compile for both (a ``prange``
-    kernel's compile is mostly its own, whatever its body: BENCHMARKS.md "A cold render compiles fewer wrappers
-    and parfors")."""
-    scene = np.ascontiguousarray(scene, dtype=np.float64)
-    per_light = _floats(per_light)
-    trans = _check_per_pixel(_floats(transmittance), scene)
-    if per_light.shape[1:] != scene.shape:
-        raise ValueError(f"per_light: shape {per_light.shape} does not match image {scene.shape}")
-    light = np.empty(scene.shape, dtype=per_light.dtype)
+def sum_lights(per_light: np.ndarray) -> np.ndarray:
+    """``Σ_k per_light[k]`` over the first axis in light order (``((L_0 + L_1) + L_2) + …``, in the buffers'
+    dtype: the same bits as NumPy's ``per_light.sum(axis=0)``), rows in parallel; zeros without lights."""
+    per_light = np.ascontiguousarray(per_light)
+    out = np.empty(per_light.shape[1:], dtype=per_light.dtype)
     if per_light.shape[0] == 0:
-        light[...] = 0
-        return light, composite_physical(scene, trans, light)
-    out = np.empty(scene.shape)
-    _sum_composite(per_light, scene, trans, light, out)
-    return light, out
+        out[...] = 0
+    else:
+        _sum_lights(per_light.reshape(per_light.shape[0], per_light.shape[1], -1),
+                    out.reshape(per_light.shape[1], -1))
+    return out
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _sum_composite(per_light, scene, trans, light, out):
+def _sum_lights(per_light, out):
+    n, h, w = per_light.shape
+    for i in prange(h):
+        for j in range(w):
+            acc = per_light[0, i, j]
+            for k in range(1, n):
+                acc += per_light[k, i, j]
+            out[i, j] = acc
+
+
+def sum_and_composite(per_light: np.ndarray, scene, transmittance) -> tuple[np.ndarray, np.ndarray]:
+    """``(inscatter, final)``: :func:`sum_lights` of ``per_light`` (n, H, W, 3) and :func:`composite_physical` of
+    ``scene``, ``transmittance`` and that sum, the same bits as the two calls, in one parallel pass over the rows
+    (one kernel to load in a fresh process instead of two, the sum read back from registers, not memory)."""
+    per_light = np.ascontiguousarray(per_light)
+    scene = np.ascontiguousarray(scene, dtype=np.float64)
+    if per_light.shape[0] == 0:
+        inscatter = sum_lights(per_light)
+        return inscatter, composite_physical(scene, transmittance, inscatter)
+    if per_light.shape[1:] != scene.shape:
+        raise ValueError(f"inscatter: shape {per_light.shape[1:]} does not match image {scene.shape}")
+    trans = _check_per_pixel(_floats(transmittance), scene)
+    inscatter = np.empty(scene.shape, dtype=per_light.dtype)
+    final = np.empty(scene.shape)
+    _sum_composite(per_light, scene, trans, inscatter, final)
+    return inscatter, final
+
+
+@njit(cache=True, fastmath=False, parallel=True)
+def _sum_composite(per_light, scene, trans, inscatter, final):
     n, h, w, c = per_light.shape
     for i in prange(h):
         for j in range(w):
             for k in range(c):
-                acc = per_light[0, i, j, k]
+                acc = per_light[0, i, j, k]  # in the buffers' dtype, lights in order (as _sum_lights)
                 for m in range(1, n):
                     acc += per_light[m, i, j, k]
-                light[i, j, k] = acc
-                out[i, j, k] = scene[i, j, k] * trans[i, j] + acc
+                inscatter[i, j, k] = acc
+                final[i, j, k] = scene[i, j, k] * trans[i, j] + acc  # as _composite, reading the stored sum
 
 
 def composite_vl(scene, volume) -> np.ndarray:

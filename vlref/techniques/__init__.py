@@ -21,14 +21,16 @@ The stage-buffer contract (:data:`Buffers`): ``render(scene, frame)`` returns a 
 plus its pass buffers under the names of ``docs/TECHNIQUES.md`` (at their own resolution) and, for a
 temporal technique, its state for the next frame under ``history`` (not an array).
 
-Adding a technique: write ``vlref/techniques/<name>.py`` with ``render`` (and its applicability rule
-when it does not light every scene), its parameter class with a field in ``TechniqueParams``, one
+Adding a technique: write ``vlref/techniques/<name>.py`` with ``render`` (and its applicability rule, named in
+the entry, when it does not light every scene), its parameter class with a field in ``TechniqueParams``, one
 :class:`Technique` entry below, and its section of ``docs/TECHNIQUES.md``.
 """
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
+from types import ModuleType
 from typing import Callable, Optional
 
 import numpy as np
@@ -36,7 +38,6 @@ import numpy as np
 from ..scene import bundled_scenes, load_scene
 from ..scene.technique_params import (RESOLVED_DEFAULTS, FroxelParams, KillzoneParams, PhysicalParams, RadialParams,
                                       SlightlyMadParams, UrpParams, resolved)
-from . import froxel, killzone, physical, radial, slightlymad, urp
 
 __all__ = ["Technique", "TECHNIQUES", "Buffers", "FRAME_BUFFERS", "RESOLVED_DEFAULTS", "resolved", "every_scene",
            "APPLIES", "suitable_scenes"]
@@ -54,29 +55,47 @@ def every_scene(scene) -> bool:
 
 @dataclass(frozen=True)
 class Technique:
-    """One registry entry.
+    """One registry entry: the technique's module ``vlref.techniques.<name>``, imported on first use (a render
+    imports its own technique's passes and kernels only), and what the registry knows without it.
 
-    ``applies(scene) -> bool`` is the golden suite's rule (:func:`vlref.oracle.golden.suite_entries`);
-    ``notes(scene, buffers) -> list[str]`` the one-line remarks ``vlref render`` prints (None: none);
-    ``bytes_per_pixel`` the peak memory per frame pixel that :func:`vlref.memory.estimate` charges.
+    ``render(scene, frame) -> Buffers`` is the module's ``render``; ``applies(scene) -> bool`` the golden suite's
+    rule (:func:`vlref.oracle.golden.suite_entries`): the module's function named ``rule``, :func:`every_scene`
+    without one; ``notes(scene, buffers) -> list[str]`` the one-line remarks ``vlref render`` prints: the module's
+    ``notes`` where ``has_notes`` (None: none); ``bytes_per_pixel`` the peak memory per frame pixel that
+    :func:`vlref.memory.estimate` charges.
     """
 
     name: str
-    render: Callable[..., Buffers]
     params: type
-    applies: Callable[..., bool]
     bytes_per_pixel: int
-    notes: Optional[Callable[..., list]] = None
+    rule: str = ""
+    has_notes: bool = False
+
+    @property
+    def module(self) -> ModuleType:
+        return importlib.import_module(f"{__name__}.{self.name}")
+
+    @property
+    def render(self) -> Callable[..., Buffers]:
+        return self.module.render
+
+    @property
+    def applies(self) -> Callable[..., bool]:
+        return getattr(self.module, self.rule) if self.rule else every_scene
+
+    @property
+    def notes(self) -> Optional[Callable[..., list]]:
+        return self.module.notes if self.has_notes else None
 
 
 TECHNIQUES: dict[str, Technique] = {t.name: t for t in (
     # bytes_per_pixel: measured peaks 228, 352, 294, 333, 292 rounded up; froxel: the largest (not measured)
-    Technique("physical", physical.render, PhysicalParams, every_scene, 240),
-    Technique("killzone", killzone.render, KillzoneParams, every_scene, 360),
-    Technique("slightlymad", slightlymad.render, SlightlyMadParams, every_scene, 300, slightlymad.notes),
-    Technique("urp", urp.render, UrpParams, urp.has_main_light, 340),
-    Technique("radial", radial.render, RadialParams, radial.light_in_frame, 300, radial.notes),
-    Technique("froxel", froxel.render, FroxelParams, every_scene, 360, froxel.notes),
+    Technique("physical", PhysicalParams, 240),
+    Technique("killzone", KillzoneParams, 360),
+    Technique("slightlymad", SlightlyMadParams, 300, has_notes=True),
+    Technique("urp", UrpParams, 340, rule="has_main_light"),
+    Technique("radial", RadialParams, 300, rule="light_in_frame", has_notes=True),
+    Technique("froxel", FroxelParams, 360, has_notes=True),
 )}
 """Every technique by name, in the order the golden suite and the listings use."""
 

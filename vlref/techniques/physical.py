@@ -69,7 +69,7 @@ def render(scene, frame) -> dict[str, np.ndarray]:
     """``inscatter``, ``transmittance``, ``final`` and ``inscatter_light_<i>`` (module docstring)."""
     per_light, trans = march_buffers(scene, frame.camera, frame.gbuffer.distance, frame.lights, frame.shadow_maps(),
                                      frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
-    inscatter, final = sum_and_composite(frame.scene_colour, trans, per_light)
+    inscatter, final = sum_and_composite(per_light, frame.scene_colour, trans)
     out = {"inscatter": inscatter, "transmittance": trans, "final": final}
     out.update({f"inscatter_light_{k}": per_light[k] for k in range(per_light.shape[0])})
     return out

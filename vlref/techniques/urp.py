@@ -28,27 +28,10 @@ from ..post.composite import composite_urp, unorm16
 from ..post.downsample import downsample_point
 from ..post.resolution import low_res_size
 from ..post.upsample import urp_upsample
-from ..scene import bundled_scenes, load_scene
 from ..scene.technique_params import resolved
+from .main_light import has_main_light, main_light
 
 __all__ = ["render", "main_light", "has_main_light", "load_jitter"]
-
-
-def main_light(scene) -> int:
-    """Index of the first directional light; :class:`InputError` when the scene has none."""
-    for i, light in enumerate(scene.lights):
-        if light.type == "directional":
-            return i
-    suitable = [name for name, path in bundled_scenes().items() if has_main_light(load_scene(path))]
-    raise InputError(scene.source or "<scene>", "render.technique",
-                     "\"urp\" needs a directional light (the URP main light); the scene has none (bundled scenes "
-                     f"with one: {', '.join(suitable)})")
-
-
-def has_main_light(scene) -> bool:
-    """The golden suite's rule (:mod:`vlref.techniques`): scenes with a directional light, the tutorial's
-    main light (the march lights nothing else)."""
-    return any(light.type == "directional" for light in scene.lights)
 
 
 def load_jitter(path: str, width: int, height: int, file: str = "<scene>") -> np.ndarray:

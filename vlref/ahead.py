@@ -1,0 +1,189 @@
+"""A cold ``vlref render``'s later stages compiled ahead in second processes (:func:`compile_ahead`).
+
+Without a warm-up (:mod:`vlref.warmup`), ``vlref render`` spreads its compile over processes: while the
+main process compiles the BVH build, second processes compile, each for the scene's types, the kernels of a
+later stage on a 1×1 frame that needs no earlier stage's kernel (no objects, no shadow maps but the stage's
+own, a G-buffer of sky: the same array types, empty): the march (with the composite of its buffers), the shadow
+maps, the ray cast, the surface shading, in that order of priority, one process per core beyond the first (on
+two cores the march alone: with the shadow maps too, that process became the longer one, BENCHMARKS.md "Cold
+first render on two cores"). The main process picks each up from the cache when it reaches that stage
+(:class:`vlref.render.Frame` ticks each stage as it ends; the next one waits for its process). The 1×1 frame
+keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
+(:func:`vlref.march.physical.march_physical`). Cold, the
+default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s
+on the slower one of 2026-11-23, where the frame's kernels took about 38 s of compile, the longer half, and
+the march without the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Scheduling, borrowed records, a
+leaner compile", "Tiles, Estrin's `exp`, a tighter PCF loop" and "The frame around the kernels").
+
+It imports only what a render imports anyway: ``vlref render`` imports it, and not :mod:`vlref.warmup`, which
+also imports the quadrature reference.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import multiprocessing
+from typing import Callable, Iterator
+
+import numpy as np
+
+from .camera import camera_from_settings
+from .geometry import GBuffer, build_geometry, raycast
+from .geometry.raycast import _raycast_kernel
+from .jit_init import initialise_numba
+from .lights import pack_lights
+from .lights.shading import _shade, scene_colour
+from .lights.shadow_cast import _cast_face, build_shadow_maps
+from .march.physical import _march_kernel
+from .post.composite import sum_and_composite
+from .processes import declare_own_kernels_only, host_cores, ignoring_sigint
+from .techniques import resolved
+from .techniques.physical import march_buffers
+
+__all__ = ["compile_ahead", "compile_stage", "stage_cached", "AHEAD", "spawn_context"]
+
+
+def spawn_context():
+    """The spawn context (a fresh interpreter per process: no forked Numba thread pool; compiled code is
+    shared via the cache)."""
+    return multiprocessing.get_context("spawn")
+
+
+def _exact(light) -> bool:
+    """Whether ``light`` has ``exact`` shadows (the march variant with the ray tracer)."""
+    return light.shadows is not None and light.shadows.enabled and light.shadows.filter == "exact"
+
+
+def _mapped(light) -> bool:
+    """Whether ``light`` has shadow maps (enabled shadows other than ``exact``)."""
+    return light.shadows is not None and light.shadows.enabled and light.shadows.filter != "exact"
+
+
+def _bare(scene, maps: bool = False):
+    """``scene`` at 1×1 with no objects; its lights keep ``exact`` shadows (they need no map, and choose the
+    march's variant) and, with ``maps``, their shadow maps at the smallest size (8 texels a side); the others
+    lose theirs."""
+    def bare_light(light):
+        if maps and _mapped(light):
+            return dataclasses.replace(light, shadows=dataclasses.replace(light.shadows, resolution=8))
+        return light if _exact(light) else dataclasses.replace(light, shadows=None)
+
+    return scene.replace(render=dataclasses.replace(scene.render, width=1, height=1), objects=(),
+                         lights=tuple(bare_light(light) for light in scene.lights))
+
+
+def _sky_gbuffer() -> GBuffer:
+    """A 1×1 G-buffer that sees the sky, built without the ray cast's kernel (the arrays it allocates)."""
+    return GBuffer(depth=np.full((1, 1), np.inf), distance=np.full((1, 1), np.inf), normal=np.zeros((1, 1, 3)),
+                   object_id=np.full((1, 1), -1, dtype=np.int32), origin=np.zeros(3), directions=np.zeros((1, 1, 3)),
+                   object_albedo=np.zeros((0, 3)), object_emission=np.zeros((0, 3)))
+
+
+def compile_stage(stage: str, scene) -> None:
+    """Compile (or load) the kernels of ``stage`` (a key of :data:`AHEAD`) for ``scene``'s types on a 1×1 frame
+    built without any other stage's kernel: no objects (empty geometry arrays, no BVH build), a G-buffer of sky,
+    shadow maps only where the stage builds them (module docstring). Every array has the dtype, rank and
+    layout of the full frame's, so the kernel compiled for it serves the real frame."""
+    bare = _bare(scene, maps=stage == "shadow maps")
+    camera = camera_from_settings(bare.camera, 1, 1)
+    geometry = build_geometry(bare)
+    lights = pack_lights(bare)
+    if stage == "raycast":
+        raycast(bare, camera, geometry)
+    elif stage == "shading":
+        scene_colour(_sky_gbuffer(), bare, geometry, lights)
+    elif stage == "shadow maps":
+        build_shadow_maps(bare, camera, geometry, lights)
+    else:  # the march, and what the technique does with its buffers (vlref.techniques.physical.render)
+        maps = build_shadow_maps(bare, camera, geometry, lights)
+        per_light, trans = march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
+                                         resolved(scene, "steps"), resolved(scene, "sampling"))
+        sum_and_composite(per_light, np.zeros((1, 1, 3)), trans)
+
+
+def _compile_stage_process(stage: str, scene) -> None:
+    """What a process of :func:`compile_ahead` runs: :func:`compile_stage`, in a process that runs vlref's kernels
+    alone (:func:`vlref.processes.declare_own_kernels_only`), with Numba initialised first as ``vlref render``'s own
+    process initialises it (:func:`vlref.jit_init.initialise_numba`: without ``scipy.linalg``, cffi and the extension
+    scan; its first compile began 0.27 s after its frame was set up, now 0.04 s, on the dev box). That process
+    starts behind the main one (its interpreter, its imports), and the main process waits for it."""
+    declare_own_kernels_only()
+    initialise_numba()
+    compile_stage(stage, scene)
+
+
+def _march_wanted(dtype, rays: bool):
+    """The march's cache entries for ``dtype`` and the shadow-ray variant (``rays``): its argument ``geo`` is
+    None without the ray tracer."""
+    import numba
+
+    want = numba.typeof(np.zeros(3, dtype=dtype))
+    geo = 8  # _march_kernel's argument ``geo``
+    return lambda sig: len(sig) > geo and sig[0] == want and (sig[geo] != numba.types.none) == rays
+
+
+AHEAD: dict[str, tuple[str, object]] = {
+    # stage -> (the render tick after which the main process calls its kernel, its kernel); in order of priority
+    "march": ("shadow maps", _march_kernel),
+    "shadow maps": ("shading", _cast_face),
+    "raycast": ("geometry", _raycast_kernel),
+    "shading": ("raycast", _shade),
+}
+"""The stages :func:`compile_ahead` may compile in second processes (the BVH build, first, stays in the main
+one); the kernel of each is the one whose cache entry says the stage is compiled."""
+
+
+def _kernel_cached(kernel, wanted=lambda sig: True) -> bool:
+    """Whether Numba's cache holds ``kernel`` for its current source with a signature ``wanted(sig)`` accepts
+    (its index, read without compiling). False when the index cannot be read."""
+    try:
+        cache = kernel._cache
+        _, magic, code = cache._index_key((), kernel.targetctx.codegen())
+        return any(key[1] == magic and key[2] == code and wanted(key[0])
+                   for key in cache._cache_file._load_index())
+    except Exception:  # a Numba without these internals: assume cold
+        return False
+
+
+def stage_cached(stage: str, scene) -> bool:
+    """Whether Numba's cache holds the kernel of ``stage`` (for the march: for ``scene``'s precision and
+    shadow-ray variant)."""
+    if stage == "march":
+        dtype = np.float32 if scene.render.precision == "float32" else np.float64
+        return _kernel_cached(_march_kernel, _march_wanted(dtype, any(_exact(light) for light in scene.lights)))
+    return _kernel_cached(AHEAD[stage][1])
+
+
+def _stages_ahead(scene) -> list[str]:
+    """The stages of a render of ``scene`` worth a second process: used by the render, not cached, one per
+    core beyond the first, in the order of :data:`AHEAD`."""
+    used = {"march": scene.render.technique == "physical",
+            "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
+    return [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)][:host_cores() - 1]
+
+
+@contextlib.contextmanager
+def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
+    """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs (module
+    docstring); yields ``ready(tick)``, to be called with each render tick: it waits for the process compiling
+    the stage that comes next. A no-op where everything is cached or on one core. The processes are
+    terminated when the block exits early (an error, an interrupt)."""
+    procs = {}
+    with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
+        for stage in _stages_ahead(scene):
+            procs[AHEAD[stage][0]] = spawn_context().Process(target=_compile_stage_process, args=(stage, scene),
+                                                             daemon=True)
+            procs[AHEAD[stage][0]].start()
+
+    def ready(tick: str) -> None:
+        if tick in procs:
+            procs[tick].join()
+
+    try:
+        yield ready
+    finally:
+        for proc in procs.values():
+            if proc.is_alive():
+                proc.terminate()
+            proc.join()
