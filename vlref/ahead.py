@@ -106,8 +106,8 @@ def _compile_stage_process(stage: str, scene) -> None:
     """What a process of :func:`compile_ahead` runs: :func:`compile_stage`, in a process that runs vlref's kernels
     alone (:func:`vlref.processes.declare_own_kernels_only`), with Numba initialised first as ``vlref render``'s own
     process initialises it (:func:`vlref.jit_init.initialise_numba`: without ``scipy.linalg``, cffi and the extension
-    scan; its first compile began 0.27 s after its frame was set up, now 0.04 s, on the dev box). That process
-    starts behind the main one (its interpreter, its imports), and the main process waits for it."""
+    scan; on the dev box its first compile began 0.31 s after its frame was set up, 0.12 + 0.04 s with it). That
+    process starts behind the main one (its interpreter, its imports), and the main process waits for it."""
     declare_own_kernels_only()
     initialise_numba()
     compile_stage(stage, scene)
