@@ -112,6 +112,12 @@ def build_context(scene, frame) -> ReferenceContext:
                             traversal_stack())
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def with_stack(ctx, stack):
+    """``ctx`` with the traversal scratch ``stack`` (:func:`vlref.geometry.traversal_stack`)."""
+    return ReferenceContext(ctx.geo, ctx.lights, ctx.shadows, ctx.medium, ctx.light_extinction, ctx.bounded, stack)
+
+
 def max_split_points(ctx, shadow_samples):
     """Capacity of the split-point buffer of one pixel (volumes, medium box, shadow boundaries)."""
     return 4 + ctx.lights.ints.shape[0] * (8 + shadow_samples)

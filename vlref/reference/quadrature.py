@@ -14,7 +14,7 @@ Method
    The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``).
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
-   spaced points of the light's active interval; wherever two neighbours differ the change is
+   spaced points of the light's active interval inside the medium box (outside it ``f = 0``); wherever two neighbours differ the change is
    bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for
    every ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or
    shadowed run shorter than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
@@ -57,13 +57,13 @@ from numba import njit, prange
 
 from ..geometry import traversal_stack
 from ..medium import clip_to_bounds
-from ..render import prepare_frame
+from ..render import Frame, prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
 from ..parallel import WORKERS, borrowed, take
 from ..progress import bands_for, row_bands
 
-__all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
+__all__ = ["ReferenceResult", "ReferenceFrame", "prepare_reference", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
 
 DEFAULT_ABS_TOL = 1e-9
 
@@ -74,8 +74,9 @@ RULES = (15, 7, 3)
 and 3 (G1–K3): fewer nodes per interval for coarse tolerances (module docstring, step 3)."""
 
 # Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
-# visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
-# thread about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
+# visibility grid, then the bisections and the quadrature's nodes) with G7–K15, the nodes' share in proportion to the
+# rule's nodes with the coarser rules (a fifth of it with G1–K3), ~4 µs each on one core; a band gives each thread
+# about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
 RAYS_BEYOND_GRID = 100
 RAYS_PER_BAND = 12_500
 
@@ -249,8 +250,11 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     boundary_err = 0.0
     n_geom = n
     width = bisection_width(rel_tol)
+    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated, and only there are
+    # shadow boundaries searched. The box's entry and exit are edges (split_points), so the pieces kept are the same.
+    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
     for light in range(ig.light_count(ctx)):
-        a, b = ig.light_interval(light, ray, 0.0, t1, ctx)
+        a, b = ig.light_interval(light, ray, inside, outside, ctx)
         if ig.casts_shadows(light, ctx):
             n, w = shadow_boundaries(light, a, b, shadow_samples, width, ray, ctx, cuts, n)
             boundary_err += w
@@ -263,9 +267,6 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     edges[m] = t1
     m += 1
     edges[:m].sort()
-    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated. The box's entry and
-    # exit are edges (split_points), so the pieces kept are the same pieces.
-    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
     k = 0
     for i in range(m):
         if inside <= edges[i] <= outside:
@@ -288,7 +289,9 @@ def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_s
     p = take(taken)
     if p >= h * w:
         return
-    work = scratch(max_intervals, max_splits)  # only by the threads that found a pixel
+    # only by the threads that found a pixel: the work arrays and the shadow rays' traversal stack
+    work = scratch(max_intervals, max_splits)
+    ctx = ig.with_stack(ctx, traversal_stack())
     while p < h * w:
         y = p // w
         x = p - y * w
@@ -320,11 +323,12 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
     taken = np.zeros(1, dtype=np.int64)
+    no_stack = (np.empty(0, dtype=np.int64), np.empty(0))  # a thread that takes a pixel makes its own
     for _ in prange(WORKERS):
-        o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
-                                                    (out, trans, err, used, ok, shadow_edges)))
-        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in), with this thread's traversal stack
-        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, traversal_stack())
+        o, d, te, g, lts, shd, med, res, st = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
+                                                        (out, trans, err, used, ok, shadow_edges), no_stack))
+        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in)
+        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, st)
         _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits, rule, res)
     return out, trans, err, used, ok, shadow_edges
 
@@ -341,7 +345,8 @@ class ReferenceResult:
     stats : counts and timings: ``intervals`` (total Gauss–Kronrod intervals), ``unconverged`` (pixels that
         hit ``max_intervals`` or the bisection floor; their ``error`` is still an honest estimate),
         ``rel_tol``, ``abs_tol``, ``shadow_samples``, ``rule``, ``seconds`` (the whole call), ``frame_seconds`` (its
-        part before the quadrature: frame, camera rays, surface distances), and ``shadow_boundaries`` (H, W) int,
+        part before the quadrature: frame, camera rays, surface distances; next to nothing where the call was given a
+        :class:`ReferenceFrame`), ``frame_reused`` (it was), and ``shadow_boundaries`` (H, W) int,
         the number of visibility changes found along each pixel ray.
     """
 
@@ -353,11 +358,51 @@ class ReferenceResult:
     stats: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class ReferenceFrame:
+    """What the quadrature of a scene's pixels reads besides its settings, prepared once by
+    :func:`prepare_reference`: :func:`render_reference` given it instead of a scene reuses it, so a sweep of
+    ``rel_tol``, ``shadow_samples`` or ``rule`` over one scene (a notebook's) pays the frame once, as a renderer
+    with its scene loaded does.
+
+    frame : :class:`vlref.render.Frame` of the scene (its ``scene`` evaluated at ``render.frame``).
+    rows : ``(y0, y1)``, the image rows prepared.  origin : (3,) the camera's position.
+    dirs : (y1 - y0, W, 3) the unit pixel directions.  t_end : (y1 - y0, W) each ray's end, ``min(surface
+    distance, render.max_distance)``.  context : :class:`~vlref.reference.integrand.ReferenceContext`.
+    seconds : the time its preparation took.
+    """
+
+    frame: Frame
+    rows: tuple[int, int]
+    origin: np.ndarray
+    dirs: np.ndarray
+    t_end: np.ndarray
+    context: ig.ReferenceContext
+    seconds: float
+
+
+def prepare_reference(scene, rows: tuple[int, int] | None = None, progress=None) -> ReferenceFrame:
+    """The :class:`ReferenceFrame` of ``scene`` (rows ``y0 <= y < y1`` of ``rows``, all when None): its frame
+    (:func:`vlref.render.prepare_frame`: camera, geometry, G-buffer, scene colour), the pixel rays and their ends."""
+    start = time.perf_counter()
+    frame = prepare_frame(scene, progress)
+    scene = frame.scene  # evaluated at render.frame (animated scenes)
+    cam = frame.camera
+    y0, y1 = rows if rows is not None else (0, scene.render.height)
+    dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])
+    surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
+    return ReferenceFrame(frame, (y0, y1), np.asarray(cam.position, dtype=np.float64), dirs,
+                          np.minimum(surface, scene.render.max_distance), ig.build_context(scene, frame),
+                          time.perf_counter() - start)
+
+
 def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_TOL, progress=None,
                      shadow_samples: int = 512, max_intervals: int = 4000,
                      rows: tuple[int, int] | None = None, rule: int = 15) -> ReferenceResult:
     """Solve the single-scattering integral of every pixel of ``scene`` (see the module docstring).
 
+    ``scene``: a scene, or a :class:`ReferenceFrame` of one (:func:`prepare_reference`), reused as it is: the same
+    result, bit for bit, as the scene's (its rows; ``rows`` must then be None);
     ``rel_tol``: target error relative to the pixel's brightest inscatter channel;
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
     ``progress``: optional callable receiving stage names; ``shadow_samples`` (>= 1): visibility grid
@@ -375,30 +420,30 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     if rule not in RULES:
         raise ValueError(f"render_reference: rule must be one of {RULES} (Gauss–Kronrod nodes), not {rule}")
     start = time.perf_counter()
-    frame = prepare_frame(scene, progress)
-    scene = frame.scene  # evaluated at render.frame (animated scenes)
-    cam = frame.camera
-    y0, y1 = rows if rows is not None else (0, scene.render.height)
-    dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])
-    surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
-    t_end = np.minimum(surface, scene.render.max_distance)
-    ctx = ig.build_context(scene, frame)
-    origin = np.asarray(cam.position, dtype=np.float64)
+    if isinstance(scene, ReferenceFrame):
+        if rows is not None:
+            raise ValueError("render_reference: rows come with the ReferenceFrame (prepare_reference's rows)")
+        prepared = scene
+    else:
+        prepared = prepare_reference(scene, rows, progress)
+    frame, (y0, y1), origin, dirs, t_end, ctx = (prepared.frame, prepared.rows, prepared.origin, prepared.dirs,
+                                                 prepared.t_end, prepared.context)
     max_splits = ig.max_split_points(ctx, shadow_samples)
     frame_seconds = time.perf_counter() - start
     # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), sized by their shadow rays; pixels are
     # independent
-    work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID) * max(1, len(scene.lights))
+    work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID * int(rule) // 15) * max(1, len(frame.scene.lights))
     # ctx without its stack: each thread makes its own
-    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx[:-1], float(rel_tol), float(abs_tol),
+    bands = [_reference_kernel(origin, dirs[b0:b1], t_end[b0:b1], *ctx[:-1], float(rel_tol), float(abs_tol),
                                int(shadow_samples), int(max_intervals), max_splits, int(rule))
-             for y0, y1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
-    inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
+             for b0, b1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
+    inscatter, trans, err, used, ok, edges = (np.concatenate(parts) if len(parts) > 1 else parts[0]
+                                              for parts in zip(*bands))
     if progress is not None:
         progress("reference")
     final = trans[..., None] * frame.scene_colour[y0:y1] + inscatter
     stats = {"intervals": int(used.sum()), "unconverged": int((~ok).sum()), "rel_tol": rel_tol,
              "abs_tol": abs_tol, "shadow_samples": shadow_samples, "rule": rule, "seconds": time.perf_counter() - start,
-             "frame_seconds": frame_seconds,
+             "frame_seconds": frame_seconds, "frame_reused": prepared is scene,
              "shadow_boundaries": edges}
     return ReferenceResult(inscatter, trans, final, err, float(err.max(initial=0.0)), stats)
