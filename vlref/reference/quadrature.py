@@ -81,11 +81,23 @@ RAYS_BEYOND_GRID = 100
 RAYS_PER_BAND = 12_500
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def integrand(u, ray, ctx, tc, h):
+    """``f`` in the variable of integration (RGB): ``f(u)`` itself where ``h = 0``, else ``f(t) dt/du`` at
+    ``t = tc + h tan u``, ``dt/du = h (1 + tan² u)`` (:func:`vlref.reference.integrand.peak_substitution`)."""
+    if h == 0.0:
+        return ig.inscatter(u, ray, ctx)
+    s = math.tan(u)
+    r, g, b = ig.inscatter(tc + h * s, ray, ctx)
+    jac = h * (1.0 + s * s)
+    return r * jac, g * jac, b * jac
+
+
 @njit(cache=True, fastmath=False)
-def gk(a, b, ray, ctx, rule):
+def gk(a, b, ray, ctx, rule, tc, h):
     """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7, 3: G1–K3;
     :data:`RULES`) nodes and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term,
-    QUADPACK's, covers rounding).
+    QUADPACK's, covers rounding); ``[a, b]`` in the variable of :func:`integrand` (``t`` where ``h = 0``).
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
     Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``.
@@ -98,11 +110,11 @@ def gk(a, b, ray, ctx, rule):
         xgk, wgk, wg = XGK, WGK, WG
     m = xgk.size - 1
     c = 0.5 * (a + b)
-    h = 0.5 * (b - a)
+    half = 0.5 * (b - a)
     k0 = k1 = k2 = g0 = g1 = g2 = a0 = a1 = a2 = 0.0
     for i in range(m):  # the symmetric pairs, then the centre (the order of the sums is part of the bits)
-        p0, p1, p2 = ig.inscatter(c - h * xgk[i], ray, ctx)
-        q0, q1, q2 = ig.inscatter(c + h * xgk[i], ray, ctx)
+        p0, p1, p2 = integrand(c - half * xgk[i], ray, ctx, tc, h)
+        q0, q1, q2 = integrand(c + half * xgk[i], ray, ctx, tc, h)
         s0, s1, s2 = p0 + q0, p1 + q1, p2 + q2
         k0 += wgk[i] * s0
         k1 += wgk[i] * s1
@@ -114,7 +126,7 @@ def gk(a, b, ray, ctx, rule):
             g0 += wg[i // 2] * s0
             g1 += wg[i // 2] * s1
             g2 += wg[i // 2] * s2
-    f0, f1, f2 = ig.inscatter(c, ray, ctx)
+    f0, f1, f2 = integrand(c, ray, ctx, tc, h)
     k0 += wgk[m] * f0
     k1 += wgk[m] * f1
     k2 += wgk[m] * f2
@@ -124,12 +136,12 @@ def gk(a, b, ray, ctx, rule):
     g0 += wg[m // 2] * f0
     g1 += wg[m // 2] * f1
     g2 += wg[m // 2] * f2
-    k0 *= h
-    k1 *= h
-    k2 *= h
-    err = max(0.0, abs(k0 - g0 * h), ROUNDOFF * a0 * abs(h))
-    err = max(err, abs(k1 - g1 * h), ROUNDOFF * a1 * abs(h))
-    err = max(err, abs(k2 - g2 * h), ROUNDOFF * a2 * abs(h))
+    k0 *= half
+    k1 *= half
+    k2 *= half
+    err = max(0.0, abs(k0 - g0 * half), ROUNDOFF * a0 * abs(half))
+    err = max(err, abs(k1 - g1 * half), ROUNDOFF * a1 * abs(half))
+    err = max(err, abs(k2 - g2 * half), ROUNDOFF * a2 * abs(half))
     return k0, k1, k2, err
 
 
@@ -145,9 +157,10 @@ def scratch(max_intervals, max_splits):
 
 
 @njit(cache=True, fastmath=False)
-def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work):
-    """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]``, at most
-    ``max(max_intervals, n_edges)`` intervals, in the arrays of ``work`` (:func:`scratch`).
+def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc, h, work):
+    """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]`` (in the
+    variable of :func:`integrand`, ``tc`` and ``h``), at most ``max(max_intervals, n_edges)`` intervals, in the
+    arrays of ``work`` (:func:`scratch`).
 
     Returns ``(integral RGB (a tuple), error estimate, intervals used, converged)``.
     """
@@ -157,7 +170,7 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
     for i in range(n_edges - 1):
         if edges[i + 1] > edges[i]:
             lo[n], hi[n] = edges[i], edges[i + 1]
-            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule)
+            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule, tc, h)
             frozen[n] = False
             n += 1
     while True:
@@ -182,9 +195,9 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
             frozen[worst] = True
             continue
         hi[worst] = m
-        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule)
+        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule, tc, h)
         lo[n], hi[n] = m, b
-        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule)
+        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule, tc, h)
         frozen[n] = False
         n += 1
 
@@ -246,13 +259,14 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     """Inscatter (RGB), error bound, interval count, convergence flag and number of shadow boundaries
     found, for one pixel ray on ``[0, t1]`` (``work``: the thread's :func:`scratch`)."""
     cuts, edges = work[0], work[1]
-    n = ig.split_points(ray, 0.0, t1, ctx, cuts)
-    boundary_err = 0.0
-    n_geom = n
-    width = bisection_width(rel_tol)
     # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated, and only there are
     # shadow boundaries searched. The box's entry and exit are edges (split_points), so the pieces kept are the same.
     inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
+    light, tc, h = ig.peak_substitution(ray, inside, outside, ctx)
+    n = ig.split_points(ray, 0.0, t1, ctx, cuts, light)
+    boundary_err = 0.0
+    n_geom = n
+    width = bisection_width(rel_tol)
     for light in range(ig.light_count(ctx)):
         a, b = ig.light_interval(light, ray, inside, outside, ctx)
         if ig.casts_shadows(light, ctx):
@@ -272,7 +286,10 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
         if inside <= edges[i] <= outside:
             edges[k] = edges[i]
             k += 1
-    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
+    if h > 0.0:  # the pieces in the variable u of t = tc + h tan u (monotone: still in order)
+        for i in range(k):
+            edges[i] = math.atan((edges[i] - tc) / h)
+    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc, h, work)
     # converged only where the whole bound, the boundaries' term included, is within the tolerance
     ok = ok and err + boundary_err <= max(rel_tol * max(abs(total[0]), abs(total[1]), abs(total[2])), abs_tol)
     return total, err + boundary_err, used, ok, n - n_geom
