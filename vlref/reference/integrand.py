@@ -38,7 +38,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..geometry import shadow_transmittance, traversal_stack
+from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
 from ..lights.shadow_lookup import apply_strength
@@ -337,7 +337,7 @@ def light_geometry(light, x, y, z, ctx):
 
 @njit(cache=True, fastmath=False, forceinline=True)
 def _shadow(light, x, y, z, lx, ly, lz, dist, ctx):
-    tr, tg, tb = shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
+    tr, tg, tb = inline_shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
     return apply_strength(ctx.shadows[light, R_STRENGTH], tr, tg, tb)
 
 
@@ -423,9 +423,11 @@ def _cone_roots(ray, px, py, pz, ax, ay, az, c, out, n):
 
 
 @njit(cache=True, fastmath=False)
-def light_interval(light, ray, t0, t1, ctx):
-    """The part of ``[t0, t1]`` where ``light`` can be non-zero (its range sphere; all of it if directional)."""
-    ints, fl = ctx.lights.ints, ctx.lights.floats
+def light_interval(light, ray, t0, t1, lights):
+    """The part of ``[t0, t1]`` where ``light`` of ``lights`` (the context's) can be non-zero (its range sphere; all
+    of it if directional). The per-pixel helpers take the records they read, not the whole context: passing the
+    context (its ~30 arrays) costs a call far more than its work."""
+    ints, fl = lights.ints, lights.floats
     if ints[light, lp.I_KIND] == lp.KIND_DIRECTIONAL:
         return t0, t1
     wx, wy, wz = ray[0] - fl[light, lp.F_PX], ray[1] - fl[light, lp.F_PY], ray[2] - fl[light, lp.F_PZ]
@@ -439,16 +441,16 @@ def light_interval(light, ray, t0, t1, ctx):
 
 
 @njit(cache=True, fastmath=False)
-def peak_substitution(ray, a, b, ctx):
+def peak_substitution(ray, a, b, lights):
     """``(light, tc, h)`` of the change of variable ``t = tc + h tan u`` about the closest approach of the scene's
-    only point or spot light to the ray (``tc = dot(P - o, d)``, ``h = |(P - o) × d|``) for the integral over
+    only point or spot light of ``lights`` (the context's) to the ray (``tc = dot(P - o, d)``, ``h = |(P - o) × d|``) for the integral over
     ``[a, b]``; ``(-1, 0.0, 0.0)`` where there is none: no light or more than one of those kinds, an empty
     ``[a, b]``, or ``max(|a - tc|, |b - tc|) > MAX_SPREAD h`` (a ray through or very near the light).
 
     ``f`` carries the light's ``1/r²`` with ``r² = h² + (t - tc)² = h² sec² u``, and ``dt = h sec² u du``, so
     ``f dt/du`` is smooth across the peak (the inverse square cancels): one piece of a few nodes integrates it, where
     ``t`` needs the peak as a split point (vlref.reference.quadrature, step 3)."""
-    ints, fl = ctx.lights.ints, ctx.lights.floats
+    ints, fl = lights.ints, lights.floats
     light = -1
     for i in range(ints.shape[0]):
         if ints[i, lp.I_KIND] != lp.KIND_DIRECTIONAL:
@@ -467,21 +469,22 @@ def peak_substitution(ray, a, b, ctx):
 
 
 @njit(cache=True, fastmath=False)
-def split_points(ray, t0, t1, ctx, out, substituted):
-    """Write the known discontinuities of ``f`` (or of its derivatives) in ``[t0, t1]`` into ``out``: light
+def split_points(ray, t0, t1, lights, mp, out, substituted):
+    """Write the known discontinuities of ``f`` (or of its derivatives) in ``[t0, t1]`` into ``out`` (``lights`` and
+    the medium's parameters ``mp``, the context's): light
     range spheres, spot cones (outer and inner), each point/spot light's closest approach but that of light
     ``substituted`` (integrated in the variable of :func:`peak_substitution`; -1: none), the medium box;
     returns the count. (Shadow boundaries are found separately by the visibility search.)"""
-    ints, fl = ctx.lights.ints, ctx.lights.floats
+    ints, fl = lights.ints, lights.floats
     n = 0
-    a, b = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
+    a, b = clip_to_bounds(mp, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
     out[0], out[1] = a, b
     n = 2
     for light in range(ints.shape[0]):
         kind = ints[light, lp.I_KIND]
         if kind == lp.KIND_DIRECTIONAL:
             continue
-        lo, hi = light_interval(light, ray, t0, t1, ctx)
+        lo, hi = light_interval(light, ray, t0, t1, lights)
         if hi > lo:
             out[n], out[n + 1] = lo, hi
             n += 2

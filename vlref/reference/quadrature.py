@@ -11,14 +11,17 @@ Method
 1. **Split points.** ``[0, t1]`` is cut at every known discontinuity of ``f`` or of its
    derivatives: the entry/exit of each light volume (range sphere, spot cone), the medium box, the
    closest approach ``tc`` of each point/spot light (the ``1/r²`` peak), and **shadow boundaries**.
-   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``).
+   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``). Where the scene
+   has a single point or spot light, its ``tc`` is no split point: the pieces are integrated in ``u`` of
+   ``t = tc + h tan u``, in which ``f dt/du`` is smooth across the peak
+   (:func:`vlref.reference.integrand.peak_substitution`, :func:`integrand`).
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
-   spaced points of the light's active interval inside the medium box (outside it ``f = 0``); wherever two neighbours differ the change is
-   bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for
-   every ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or
-   shadowed run shorter than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
-   unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
+   spaced points of the light's active interval inside the medium box (outside it ``f = 0``);
+   wherever two neighbours differ the change is bisected to ``|Δt| ≤ w · max(1, t)``,
+   ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for every ``rel_tol ≤ 1e-3``; the bracket's
+   width enters the bound, step 4). *Resolution limit*: a lit or shadowed run shorter than the grid
+   spacing ``(interval length) / shadow_samples`` can fall between two samples and go unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
    split the Gauss–Kronrod error estimate can miss it. Size the grid so that the spacing is below
    the thinnest shadow feature along a ray (default 512 samples: 2 cm on a 10 m light volume).
 3. **Adaptive Gauss–Kronrod (G7–K15, or G3–K7), global.** Each piece starts as one interval; the interval
@@ -262,13 +265,13 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated, and only there are
     # shadow boundaries searched. The box's entry and exit are edges (split_points), so the pieces kept are the same.
     inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
-    light, tc, h = ig.peak_substitution(ray, inside, outside, ctx)
-    n = ig.split_points(ray, 0.0, t1, ctx, cuts, light)
+    light, tc, h = ig.peak_substitution(ray, inside, outside, ctx.lights)
+    n = ig.split_points(ray, 0.0, t1, ctx.lights, ctx.medium.params, cuts, light)
     boundary_err = 0.0
     n_geom = n
     width = bisection_width(rel_tol)
     for light in range(ig.light_count(ctx)):
-        a, b = ig.light_interval(light, ray, inside, outside, ctx)
+        a, b = ig.light_interval(light, ray, inside, outside, ctx.lights)
         if ig.casts_shadows(light, ctx):
             n, w = shadow_boundaries(light, a, b, shadow_samples, width, ray, ctx, cuts, n)
             boundary_err += w
