@@ -1,8 +1,9 @@
 # The reference against main and Mitsuba 3 in one device call (BENCHMARKS.md, "The reference at Mitsuba's warm 1024
-# spp launch"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN and the Mitsuba
-# bundle in .dev/mitsuba-bundle:  bash .dev/TREE/benchmarks/reference_device.sh TREE MAIN
+# spp launch"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN, optionally an
+# earlier state of this tree in .dev/PREV, and the Mitsuba bundle in .dev/mitsuba-bundle:
+#     bash .dev/TREE/benchmarks/reference_device.sh TREE MAIN [PREV]
 set -u
-ROOT=$PWD T=$PWD/.dev/$1 M=$PWD/.dev/$2 OUT=${OUT:-/tmp/out}
+T=$PWD/.dev/$1 M=$PWD/.dev/$2 P=${3:+$PWD/.dev/$3} OUT=${OUT:-/tmp/out}
 python3 .dev/mitsuba-bundle/unpack.py .dev/mitsuba-bundle /tmp/mits > /dev/null
 export LD_LIBRARY_PATH=/tmp/mits/lib PYTHONUNBUFFERED=1
 ab() {  # tree dir, tag, cache, settings
@@ -11,11 +12,14 @@ ab() {  # tree dir, tag, cache, settings
 }
 MS=1/1/3,5e-1/1/3,1/1/7 TS=1/1/3,5e-1/1/3,7e-1/1/3,1/1/7
 start=$(date +%s)
-ab $M main /tmp/nc_main $MS > $OUT/warm_main.txt 2>&1 & ab $T tree /tmp/nc_tree $TS > $OUT/warm_tree.txt 2>&1 & wait
-echo "cold compiles (both, in parallel): $(( $(date +%s) - start )) s" | tee -a $OUT/ab.txt
-for x in "$M main /tmp/nc_main $MS" "$T tree /tmp/nc_tree $TS" "$T tree /tmp/nc_tree $TS" "$M main /tmp/nc_main $MS"; do
-  ab $x >> $OUT/ab.txt 2>&1
-done
+ab $M main /tmp/nc_main $MS > $OUT/warm_main.txt 2>&1 & ab $T tree /tmp/nc_tree $TS > $OUT/warm_tree.txt 2>&1 &
+if [ -n "$P" ]; then ab $P prev /tmp/nc_prev $TS > $OUT/warm_prev.txt 2>&1 & fi
+wait
+echo "cold compiles (in parallel): $(( $(date +%s) - start )) s" | tee -a $OUT/ab.txt
+order=("$M main /tmp/nc_main $MS" "$T tree /tmp/nc_tree $TS" "$T tree /tmp/nc_tree $TS" "$M main /tmp/nc_main $MS")
+[ -n "$P" ] && order=("$M main /tmp/nc_main $MS" "$P prev /tmp/nc_prev $TS" "$T tree /tmp/nc_tree $TS"
+                      "$T tree /tmp/nc_tree $TS" "$P prev /tmp/nc_prev $TS" "$M main /tmp/nc_main $MS")
+for x in "${order[@]}"; do ab $x >> $OUT/ab.txt 2>&1; done
 cd $T
 for n in 16 1; do NUMBA_CACHE_DIR=/tmp/nc_tree PYTHONPATH=$T python3 benchmarks/reference_frame_split.py --threads $n \
   >> $OUT/frame_split.txt 2>&1; done

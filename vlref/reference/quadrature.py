@@ -81,6 +81,10 @@ and 3 (G1–K3): fewer nodes per interval for coarse tolerances (module docstrin
 # rule's nodes with the coarser rules (a fifth of it with G1–K3), ~4 µs each on one core; a band gives each thread
 # about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
 RAYS_BEYOND_GRID = 100
+TASK_PIXELS = 8
+"""Consecutive pixels per task of the kernel's threads: a thread writes its pixels' results into cache lines of its
+own (eight float64 to a line) instead of sharing each line with the threads of the neighbouring pixels, and takes
+from the shared counter once per eight pixels."""
 RAYS_PER_BAND = 12_500
 
 
@@ -301,37 +305,38 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
 @njit(cache=True, fastmath=False)
 def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
                      rule, results):
-    """Take pixels (row-major index, :func:`vlref.parallel.take` on ``taken``) until none is left and solve each
-    one's integral (:func:`pixel_integral`, in one :func:`scratch` for all of them) and view transmittance into
-    ``results`` ``(out, trans, err, used, ok, shadow_edges)``."""
+    """Take tasks of :data:`TASK_PIXELS` consecutive pixels (row-major, :func:`vlref.parallel.take` on ``taken``)
+    until none is left and solve each pixel's integral (:func:`pixel_integral`, in one :func:`scratch` for all of
+    them) and view transmittance into ``results`` ``(out, trans, err, used, ok, shadow_edges)``."""
     h, w = t_end.shape
     out, trans, err, used, ok, shadow_edges = results
-    p = take(taken)
-    if p >= h * w:
+    start = take(taken) * TASK_PIXELS
+    if start >= h * w:
         return
     # only by the threads that found a pixel: the work arrays and the shadow rays' traversal stack
     work = scratch(max_intervals, max_splits)
     ctx = ig.with_stack(ctx, traversal_stack())
-    while p < h * w:
-        y = p // w
-        x = p - y * w
-        ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
-        total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
-                                               max_intervals, rule, work)
-        out[y, x, 0], out[y, x, 1], out[y, x, 2] = total
-        err[y, x] = e
-        used[y, x] = n
-        ok[y, x] = good
-        shadow_edges[y, x] = nb
-        trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
-        p = take(taken)
+    while start < h * w:
+        for p in range(start, min(start + TASK_PIXELS, h * w)):
+            y = p // w
+            x = p - y * w
+            ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
+            total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
+                                                   max_intervals, rule, work)
+            out[y, x, 0], out[y, x, 1], out[y, x, 2] = total
+            err[y, x] = e
+            used[y, x] = n
+            ok[y, x] = good
+            shadow_edges[y, x] = nb
+            trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
+        start = take(taken) * TASK_PIXELS
 
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
                       shadow_samples, max_intervals, max_splits, rule):
     """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over
-    :data:`~vlref.parallel.WORKERS` take pixels on demand (a pixel without shadow boundaries costs a few
+    :data:`~vlref.parallel.WORKERS` take tasks of pixels on demand (a pixel without shadow boundaries costs a few
     dozen integrand evaluations, one crossing several shadows hundreds: ``prange``'s static split would
     leave threads idle), with the arrays borrowed (:func:`vlref.parallel.borrowed`: no reference counts
     on the records every shadow ray reads). Which thread solves a pixel changes no bit of it."""
