@@ -14,12 +14,15 @@ called on those rays through its Python API, so no film filter or camera convent
    ``--repeats`` before Mitsuba's runs and as many after, so load drifts hit both renderers), the part of it spent
    before the quadrature (``stats["frame_seconds"]``: the frame, camera rays, G-buffer), with ``--one-thread`` one
    run on one Numba thread (the parallel efficiency), and its per-pixel error against the converged answer (max over
-   RGB): median and 99th percentile.
+   RGB): median and 99th percentile. Beside the whole call, the same number of calls given the scene's
+   :func:`~vlref.reference.prepare_reference` made once (``reused_seconds``: the frame reused, as Mitsuba's timed
+   launches reuse its loaded scene and BVH; the same bits).
 3. Mitsuba (``llvm_ad_rgb``, every core Dr.Jit finds) at increasing samples per pixel: wall time (after a warm-up
    pass that compiles its kernels) and the same error statistics. The next spp is skipped once its projected time
    (linear in spp) passes ``--mitsuba-budget`` seconds.
 4. **Measured ratio at the same error**: for each Mitsuba run, the fastest vlref setting whose median *and* 99th
-   percentile errors are both no larger than Mitsuba's; the ratio is Mitsuba's time over that setting's time.
+   percentile errors are both no larger than Mitsuba's; the ratio is Mitsuba's time over that setting's time (the
+   whole call), and ``ratio_reused`` the same with the frame reused.
    Both are measured; vlref's error is then at most Mitsuba's (usually well below), so the ratio is a lower bound
    of the ratio at exactly equal error.
 5. Context, the extrapolation (no measurement): the error vlref's default setting reaches, floored by what the
@@ -52,7 +55,7 @@ import time
 import numba
 import numpy as np
 
-from vlref.reference import render_reference
+from vlref.reference import prepare_reference, render_reference
 from vlref.reference.mitsuba import mitsuba_scene
 from vlref.render import prepare_frame
 from vlref.scene.model import Bounds, Box, CameraSettings, Light, Medium, RenderSettings, Scene, ShadowSettings, Sphere
@@ -100,14 +103,20 @@ def run_vlref(scene: Scene, setting: tuple[float, int, int], converged: np.ndarr
     """``repeats`` timed runs of one setting (after a warm-up run), their time before the quadrature, the result's
     error, and with ``one_thread`` the time of one run on one Numba thread."""
     reference(scene, setting)  # compiles (first call) / warms
-    seconds, frame = [], []
+    seconds, frame, reused = [], [], []
     for _ in range(repeats):
         start = time.perf_counter()
         result = reference(scene, setting)
         seconds.append(time.perf_counter() - start)
         frame.append(result.stats["frame_seconds"])
+    prepared = prepare_reference(scene)
+    for _ in range(repeats):
+        start = time.perf_counter()
+        again = reference(prepared, setting)
+        reused.append(time.perf_counter() - start)
+    assert np.array_equal(again.inscatter, result.inscatter)
     out = {"rel_tol": setting[0], "shadow_samples": setting[1], "rule": setting[2], "runs_s": seconds,
-           "frame_runs_s": frame, **errors(result.inscatter, converged)}
+           "frame_runs_s": frame, "reused_runs_s": reused, **errors(result.inscatter, converged)}
     if one_thread:
         threads = numba.get_num_threads()
         numba.set_num_threads(1)
@@ -182,10 +191,14 @@ def at_same_error(mitsuba: list[dict], vlref: list[dict]) -> list[dict]:
     for m in mitsuba:
         fits = [v for v in vlref if v["median"] <= m["median"] and v["p99"] <= m["p99"]]
         best = min(fits, key=lambda v: v["seconds"]) if fits else None
+        reused = min(fits, key=lambda v: v["reused_seconds"]) if fits else None
         out.append({"spp": m["spp"], "mitsuba_seconds": m["seconds"], "mitsuba_error": [m["median"], m["p99"]],
                     "vlref": None if best is None else {k: best[k] for k in ("rel_tol", "shadow_samples", "rule",
                                                                                 "seconds", "median", "p99")},
-                    "ratio": None if best is None else m["seconds"] / best["seconds"]})
+                    "ratio": None if best is None else m["seconds"] / best["seconds"],
+                    "vlref_reused": None if reused is None else {k: reused[k] for k in (
+                        "rel_tol", "shadow_samples", "rule", "reused_seconds", "median", "p99")},
+                    "ratio_reused": None if reused is None else m["seconds"] / reused["reused_seconds"]})
     return out
 
 
@@ -278,10 +291,11 @@ def main() -> None:
     report["mitsuba"] = time_mitsuba(rays, spp_list, converged.inscatter, args.mitsuba_budget)
     for v, s in zip(report["vlref"], settings):  # the same runs after Mitsuba's: load drifts hit both renderers
         again = run_vlref(scene, s, converged.inscatter, args.repeats)
-        v["runs_s"] += again["runs_s"]
-        v["frame_runs_s"] += again["frame_runs_s"]
+        for key in ("runs_s", "frame_runs_s", "reused_runs_s"):
+            v[key] += again[key]
         v["seconds"] = float(np.median(v["runs_s"]))
         v["frame_seconds"] = float(np.median(v["frame_runs_s"]))
+        v["reused_seconds"] = float(np.median(v["reused_runs_s"]))
     report["same_error"] = at_same_error(report["mitsuba"], report["vlref"])
     floor = {"median": float(np.median(converged.error)), "p99": float(np.percentile(converged.error, 99))}
     report["converged"]["error_bound"] = floor
@@ -302,7 +316,7 @@ def main() -> None:
         one = f", one thread {v['one_thread_s']:.4f} s" if "one_thread_s" in v else ""
         print(f"vlref reference {label(v)} (rel_tol/shadow_samples/rule): {v['seconds']:.4f} s "
               f"(runs {', '.join(f'{t:.4f}' for t in v['runs_s'])}; before the quadrature {v['frame_seconds']:.4f} s"
-              f"{one}), error median {v['median']:.3g} p99 "
+              f"{one}; the frame reused {v['reused_seconds']:.4f} s), error median {v['median']:.3g} p99 "
               f"{v['p99']:.3g} ({v['median_rel_peak']:.2g} / {v['p99_rel_peak']:.2g} of the peak)")
     for m in report["mitsuba"]:
         print(f"mitsuba {m['spp']:6d} spp: {m['seconds']:.3f} s, error median {m['median']:.3g} p99 {m['p99']:.3g} "
@@ -315,7 +329,8 @@ def main() -> None:
         print(f"same error as Mitsuba {r['spp']} spp ({r['mitsuba_seconds']:.3f} s, median {r['mitsuba_error'][0]:.3g}"
               f" p99 {r['mitsuba_error'][1]:.3g}): vlref {label(v)}, {v['seconds']:.4f} s, median "
               f"{v['median']:.3g} p99 {v['p99']:.3g}: "
-              f"**{r['ratio']:.4g}x** (measured)")
+              f"**{r['ratio']:.4g}x** (measured, the whole call); the frame reused: {label(r['vlref_reused'])}, "
+              f"{r['vlref_reused']['reused_seconds']:.4f} s, **{r['ratio_reused']:.4g}x**")
     e = report["extrapolated"]
     how = "measured" if e["measured"] else "extrapolated by spp^-1/2"
     print(f"context: vlref's default error (median {e['target']['median']:.3g}, p99 {e['target']['p99']:.3g}) needs "

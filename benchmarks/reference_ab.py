@@ -9,8 +9,10 @@ main) so load drifts hit both:
 
 Per setting ``rel_tol/shadow_samples/rule``: one warm-up call (it compiles or loads the kernels), then ``--repeats``
 timed calls on every Numba thread (wall time, median and min; the part before the quadrature,
-``stats["frame_seconds"]``), and with ``--one-thread`` as many on one thread (process CPU time, min), plus the
-sha256 of the inscatter image (the same setting in two trees: the same bits or not).
+``stats["frame_seconds"]``), where the tree has :func:`~vlref.reference.prepare_reference` as many calls given the
+scene's prepared frame (``reused_median_s``: the frame reused), and with ``--one-thread`` as many whole calls on one
+thread (process CPU time, min), plus the sha256 of the inscatter image (the same setting in two trees: the same
+bits or not).
 """
 
 from __future__ import annotations
@@ -28,6 +30,7 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mitsuba_ratio import bench_scene, parse_settings  # noqa: E402  (this folder, whichever tree is on the path)
 
+import vlref.reference as reference  # noqa: E402
 from vlref.reference import render_reference  # noqa: E402
 
 
@@ -54,6 +57,13 @@ def main() -> None:
                "median_s": float(np.median(wall)), "min_s": min(wall), "frame_s": float(np.median(frame)),
                "intervals": result.stats["intervals"],
                "sha": hashlib.sha256(result.inscatter.tobytes()).hexdigest()[:16]}
+        if hasattr(reference, "prepare_reference"):  # trees before it: the whole call only
+            prepared, reused = reference.prepare_reference(scene), []
+            for _ in range(args.repeats):
+                start = time.perf_counter()
+                render_reference(prepared, **kw)
+                reused.append(time.perf_counter() - start)
+            row["reused_median_s"] = float(np.median(reused))
         if args.one_thread:
             threads = numba.get_num_threads()
             numba.set_num_threads(1)

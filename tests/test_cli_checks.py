@@ -465,11 +465,12 @@ def test_faithful_artifacts_are_named_in_the_render_note(tmp_path, capsys, scene
 
     sets = [x for s in ["render.width=16", "render.height=9", *sets] for x in ("--set", s)]
     assert main(["render", scene, "--technique", technique, "-o", str(tmp_path / "o"), *sets]) == 0
-    notes = [l for l in capsys.readouterr().err.splitlines() if l.startswith("vlref: note: ")]
+    err = capsys.readouterr().err
+    notes = [l for l in err.splitlines() if l.startswith("vlref: note: ")]
     if says is None:
-        assert not any("faithful" in l for l in notes), notes
+        assert not any("faithful" in l for l in notes), repr(err)
     else:
-        assert any(says in l and "faithful" in l and "docs/TECHNIQUES.md" in l for l in notes), notes
+        assert any(says in l and "faithful" in l and "docs/TECHNIQUES.md" in l for l in notes), repr(err)
 
 
 def test_sweep_summary_names_the_denominators_of_its_relative_errors(tmp_path):

@@ -37,7 +37,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..geometry import shadow_transmittance, traversal_stack
+from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..jit import njit
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
@@ -75,6 +75,11 @@ XGK3 = np.array([0.774596669241483377035853079956480, 0.0])
 WGK3 = np.array([0.555555555555555555555555555555556, 0.888888888888888888888888888888889])
 WG1 = np.array([2.0])
 
+MAX_SPREAD = 1e4
+"""The change of variable about a light's closest approach (:func:`peak_substitution`) is used where the pixel's
+interval reaches at most this many ``h`` from ``tc``: its edges ``u = atan((t - tc) / h)`` then lie at least ~1e-4
+from ``±π/2``, where ``t = tc + h tan u`` keeps ~1e-12 of relative accuracy."""
+
 # per-light reference flags (float64 columns of ReferenceContext.shadows)
 R_SHADOWS, R_STRENGTH = 0, 1
 
@@ -110,6 +115,12 @@ def build_context(scene, frame) -> ReferenceContext:
     return ReferenceContext(frame.geometry.arrays, frame.lights.astype(np.float64), flags, med.astype(np.float64),
                             bool(scene.techniques.physical.light_extinction), scene.medium.bounds is not None,
                             traversal_stack())
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def with_stack(ctx, stack):
+    """``ctx`` with the traversal scratch ``stack`` (:func:`vlref.geometry.traversal_stack`)."""
+    return ReferenceContext(ctx.geo, ctx.lights, ctx.shadows, ctx.medium, ctx.light_extinction, ctx.bounded, stack)
 
 
 def max_split_points(ctx, shadow_samples):
@@ -326,7 +337,7 @@ def light_geometry(light, x, y, z, ctx):
 
 @njit(cache=True, fastmath=False, forceinline=True)
 def _shadow(light, x, y, z, lx, ly, lz, dist, ctx):
-    tr, tg, tb = shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
+    tr, tg, tb = inline_shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
     return apply_strength(ctx.shadows[light, R_STRENGTH], tr, tg, tb)
 
 
@@ -412,9 +423,11 @@ def _cone_roots(ray, px, py, pz, ax, ay, az, c, out, n):
 
 
 @njit(cache=True, fastmath=False)
-def light_interval(light, ray, t0, t1, ctx):
-    """The part of ``[t0, t1]`` where ``light`` can be non-zero (its range sphere; all of it if directional)."""
-    ints, fl = ctx.lights.ints, ctx.lights.floats
+def light_interval(light, ray, t0, t1, lights):
+    """The part of ``[t0, t1]`` where ``light`` of ``lights`` (the context's) can be non-zero (its range sphere; all
+    of it if directional). The per-pixel helpers take the records they read, not the whole context: passing the
+    context (its ~30 arrays) costs a call far more than its work."""
+    ints, fl = lights.ints, lights.floats
     if ints[light, lp.I_KIND] == lp.KIND_DIRECTIONAL:
         return t0, t1
     wx, wy, wz = ray[0] - fl[light, lp.F_PX], ray[1] - fl[light, lp.F_PY], ray[2] - fl[light, lp.F_PZ]
@@ -428,26 +441,57 @@ def light_interval(light, ray, t0, t1, ctx):
 
 
 @njit(cache=True, fastmath=False)
-def split_points(ray, t0, t1, ctx, out):
-    """Write the known discontinuities of ``f`` (or of its derivatives) in ``[t0, t1]`` into ``out``: light
-    range spheres, spot cones (outer and inner), each point/spot light's closest approach, the medium box;
+def peak_substitution(ray, a, b, lights):
+    """``(light, tc, h)`` of the change of variable ``t = tc + h tan u`` about the closest approach of the scene's
+    only point or spot light of ``lights`` (the context's) to the ray (``tc = dot(P - o, d)``, ``h = |(P - o) × d|``) for the integral over
+    ``[a, b]``; ``(-1, 0.0, 0.0)`` where there is none: no light or more than one of those kinds, an empty
+    ``[a, b]``, or ``max(|a - tc|, |b - tc|) > MAX_SPREAD h`` (a ray through or very near the light).
+
+    ``f`` carries the light's ``1/r²`` with ``r² = h² + (t - tc)² = h² sec² u``, and ``dt = h sec² u du``, so
+    ``f dt/du`` is smooth across the peak (the inverse square cancels): one piece of a few nodes integrates it, where
+    ``t`` needs the peak as a split point (vlref.reference.quadrature, step 3)."""
+    ints, fl = lights.ints, lights.floats
+    light = -1
+    for i in range(ints.shape[0]):
+        if ints[i, lp.I_KIND] != lp.KIND_DIRECTIONAL:
+            if light >= 0:
+                return -1, 0.0, 0.0
+            light = i
+    if light < 0 or not b > a:
+        return -1, 0.0, 0.0
+    wx, wy, wz = fl[light, lp.F_PX] - ray[0], fl[light, lp.F_PY] - ray[1], fl[light, lp.F_PZ] - ray[2]
+    tc = wx * ray[3] + wy * ray[4] + wz * ray[5]
+    cx, cy, cz = wy * ray[5] - wz * ray[4], wz * ray[3] - wx * ray[5], wx * ray[4] - wy * ray[3]
+    h = math.sqrt(cx * cx + cy * cy + cz * cz)
+    if not h * MAX_SPREAD >= max(abs(a - tc), abs(b - tc)):
+        return -1, 0.0, 0.0
+    return light, tc, h
+
+
+@njit(cache=True, fastmath=False)
+def split_points(ray, t0, t1, lights, mp, out, substituted):
+    """Write the known discontinuities of ``f`` (or of its derivatives) in ``[t0, t1]`` into ``out`` (``lights`` and
+    the medium's parameters ``mp``, the context's): light
+    range spheres, spot cones (outer and inner), each point/spot light's closest approach but that of light
+    ``substituted`` (integrated in the variable of :func:`peak_substitution`; -1: none), the medium box;
     returns the count. (Shadow boundaries are found separately by the visibility search.)"""
-    ints, fl = ctx.lights.ints, ctx.lights.floats
+    ints, fl = lights.ints, lights.floats
     n = 0
-    a, b = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
+    a, b = clip_to_bounds(mp, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], t0, t1)
     out[0], out[1] = a, b
     n = 2
     for light in range(ints.shape[0]):
         kind = ints[light, lp.I_KIND]
         if kind == lp.KIND_DIRECTIONAL:
             continue
-        lo, hi = light_interval(light, ray, t0, t1, ctx)
+        lo, hi = light_interval(light, ray, t0, t1, lights)
         if hi > lo:
             out[n], out[n + 1] = lo, hi
             n += 2
         px, py, pz = fl[light, lp.F_PX], fl[light, lp.F_PY], fl[light, lp.F_PZ]
-        out[n] = (px - ray[0]) * ray[3] + (py - ray[1]) * ray[4] + (pz - ray[2]) * ray[5]
-        n += 1
+        if light != substituted:
+            out[n] = (px - ray[0]) * ray[3] + (py - ray[1]) * ray[4] + (pz - ray[2]) * ray[5]
+            n += 1
         if kind == lp.KIND_SPOT:
             ax, ay, az = fl[light, lp.F_DX], fl[light, lp.F_DY], fl[light, lp.F_DZ]
             n = _cone_roots(ray, px, py, pz, ax, ay, az, fl[light, lp.F_COS_OUTER], out, n)

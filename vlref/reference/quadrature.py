@@ -11,14 +11,17 @@ Method
 1. **Split points.** ``[0, t1]`` is cut at every known discontinuity of ``f`` or of its
    derivatives: the entry/exit of each light volume (range sphere, spot cone), the medium box, the
    closest approach ``tc`` of each point/spot light (the ``1/r²`` peak), and **shadow boundaries**.
-   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``).
+   The pieces outside the medium box are left out (``σs = 0`` there, so ``f = 0``). Where the scene
+   has a single point or spot light, its ``tc`` is no split point: the pieces are integrated in ``u`` of
+   ``t = tc + h tan u``, in which ``f dt/du`` is smooth across the peak
+   (:func:`vlref.reference.integrand.peak_substitution`, :func:`integrand`).
 2. **Shadow boundaries.** For each light, the visibility ``V`` (``geometry.shadow_transmittance``,
    an exact shadow ray, RGB for tinted occluders) is sampled at ``shadow_samples + 1`` uniformly
-   spaced points of the light's active interval; wherever two neighbours differ the change is
-   bisected to ``|Δt| ≤ w · max(1, t)``, ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for
-   every ``rel_tol ≤ 1e-3``; the bracket's width enters the bound, step 4). *Resolution limit*: a lit or
-   shadowed run shorter than the grid spacing ``(interval length) / shadow_samples`` can fall between two samples and go
-   unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
+   spaced points of the light's active interval inside the medium box (outside it ``f = 0``);
+   wherever two neighbours differ the change is bisected to ``|Δt| ≤ w · max(1, t)``,
+   ``w = 1e-3 rel_tol³`` (:func:`bisection_width`; 1e-12 for every ``rel_tol ≤ 1e-3``; the bracket's
+   width enters the bound, step 4). *Resolution limit*: a lit or shadowed run shorter than the grid
+   spacing ``(interval length) / shadow_samples`` can fall between two samples and go unsplit. It is then still integrated (``f`` evaluates ``V`` exactly at every node), but without a
    split the Gauss–Kronrod error estimate can miss it. Size the grid so that the spacing is below
    the thinnest shadow feature along a ray (default 512 samples: 2 cm on a 10 m light volume).
 3. **Adaptive Gauss–Kronrod (G7–K15, or G3–K7), global.** Each piece starts as one interval; the interval
@@ -58,13 +61,13 @@ from numba import prange
 from ..geometry import traversal_stack
 from ..jit import njit
 from ..medium import clip_to_bounds
-from ..render import prepare_frame
+from ..render import Frame, prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
 from ..parallel import WORKERS, borrowed, take, task_counter
 from ..progress import bands_for, row_bands
 
-__all__ = ["ReferenceResult", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
+__all__ = ["ReferenceResult", "ReferenceFrame", "prepare_reference", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
 
 DEFAULT_ABS_TOL = 1e-9
 
@@ -75,17 +78,34 @@ RULES = (15, 7, 3)
 and 3 (G1–K3): fewer nodes per interval for coarse tolerances (module docstring, step 3)."""
 
 # Band sizing (vlref.progress): a pixel traces about shadow_samples + RAYS_BEYOND_GRID shadow rays per light (its
-# visibility grid, then the bisections and the quadrature's nodes), ~4 µs each on one core; a band gives each
-# thread about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
+# visibility grid, then the bisections and the quadrature's nodes) with G7–K15, the nodes' share in proportion to the
+# rule's nodes with the coarser rules (a fifth of it with G1–K3), ~4 µs each on one core; a band gives each thread
+# about RAYS_PER_BAND of them (~0.05 s), so a small image is one or two launches, not one per row.
 RAYS_BEYOND_GRID = 100
+TASK_PIXELS = 8
+"""Consecutive pixels per task of the kernel's threads: a thread writes its pixels' results into cache lines of its
+own (eight float64 to a line) instead of sharing each line with the threads of the neighbouring pixels, and takes
+from the shared counter once per eight pixels."""
 RAYS_PER_BAND = 12_500
 
 
+@njit(cache=True, fastmath=False, forceinline=True)
+def integrand(u, ray, ctx, tc, h):
+    """``f`` in the variable of integration (RGB): ``f(u)`` itself where ``h = 0``, else ``f(t) dt/du`` at
+    ``t = tc + h tan u``, ``dt/du = h (1 + tan² u)`` (:func:`vlref.reference.integrand.peak_substitution`)."""
+    if h == 0.0:
+        return ig.inscatter(u, ray, ctx)
+    s = math.tan(u)
+    r, g, b = ig.inscatter(tc + h * s, ray, ctx)
+    jac = h * (1.0 + s * s)
+    return r * jac, g * jac, b * jac
+
+
 @njit(cache=True, fastmath=False)
-def gk(a, b, ray, ctx, rule):
+def gk(a, b, ray, ctx, rule, tc, h):
     """Kronrod integral (RGB tuple) of ``f`` on ``[a, b]`` with ``rule`` (15: G7–K15, 7: G3–K7, 3: G1–K3;
     :data:`RULES`) nodes and its error estimate ``max_c max(|K_c - G_c|, 50 ε ∫|f_c|)`` (the second term,
-    QUADPACK's, covers rounding).
+    QUADPACK's, covers rounding); ``[a, b]`` in the variable of :func:`integrand` (``t`` where ``h = 0``).
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
     Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``.
@@ -98,11 +118,11 @@ def gk(a, b, ray, ctx, rule):
         xgk, wgk, wg = XGK, WGK, WG
     m = xgk.size - 1
     c = 0.5 * (a + b)
-    h = 0.5 * (b - a)
+    half = 0.5 * (b - a)
     k0 = k1 = k2 = g0 = g1 = g2 = a0 = a1 = a2 = 0.0
     for i in range(m):  # the symmetric pairs, then the centre (the order of the sums is part of the bits)
-        p0, p1, p2 = ig.inscatter(c - h * xgk[i], ray, ctx)
-        q0, q1, q2 = ig.inscatter(c + h * xgk[i], ray, ctx)
+        p0, p1, p2 = integrand(c - half * xgk[i], ray, ctx, tc, h)
+        q0, q1, q2 = integrand(c + half * xgk[i], ray, ctx, tc, h)
         s0, s1, s2 = p0 + q0, p1 + q1, p2 + q2
         k0 += wgk[i] * s0
         k1 += wgk[i] * s1
@@ -114,7 +134,7 @@ def gk(a, b, ray, ctx, rule):
             g0 += wg[i // 2] * s0
             g1 += wg[i // 2] * s1
             g2 += wg[i // 2] * s2
-    f0, f1, f2 = ig.inscatter(c, ray, ctx)
+    f0, f1, f2 = integrand(c, ray, ctx, tc, h)
     k0 += wgk[m] * f0
     k1 += wgk[m] * f1
     k2 += wgk[m] * f2
@@ -124,12 +144,12 @@ def gk(a, b, ray, ctx, rule):
     g0 += wg[m // 2] * f0
     g1 += wg[m // 2] * f1
     g2 += wg[m // 2] * f2
-    k0 *= h
-    k1 *= h
-    k2 *= h
-    err = max(0.0, abs(k0 - g0 * h), ROUNDOFF * a0 * abs(h))
-    err = max(err, abs(k1 - g1 * h), ROUNDOFF * a1 * abs(h))
-    err = max(err, abs(k2 - g2 * h), ROUNDOFF * a2 * abs(h))
+    k0 *= half
+    k1 *= half
+    k2 *= half
+    err = max(0.0, abs(k0 - g0 * half), ROUNDOFF * a0 * abs(half))
+    err = max(err, abs(k1 - g1 * half), ROUNDOFF * a1 * abs(half))
+    err = max(err, abs(k2 - g2 * half), ROUNDOFF * a2 * abs(half))
     return k0, k1, k2, err
 
 
@@ -145,9 +165,10 @@ def scratch(max_intervals, max_splits):
 
 
 @njit(cache=True, fastmath=False)
-def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work):
-    """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]``, at most
-    ``max(max_intervals, n_edges)`` intervals, in the arrays of ``work`` (:func:`scratch`).
+def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc, h, work):
+    """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]`` (in the
+    variable of :func:`integrand`, ``tc`` and ``h``), at most ``max(max_intervals, n_edges)`` intervals, in the
+    arrays of ``work`` (:func:`scratch`).
 
     Returns ``(integral RGB (a tuple), error estimate, intervals used, converged)``.
     """
@@ -157,7 +178,7 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
     for i in range(n_edges - 1):
         if edges[i + 1] > edges[i]:
             lo[n], hi[n] = edges[i], edges[i + 1]
-            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule)
+            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule, tc, h)
             frozen[n] = False
             n += 1
     while True:
@@ -182,9 +203,9 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, wo
             frozen[worst] = True
             continue
         hi[worst] = m
-        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule)
+        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule, tc, h)
         lo[n], hi[n] = m, b
-        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule)
+        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule, tc, h)
         frozen[n] = False
         n += 1
 
@@ -246,12 +267,16 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     """Inscatter (RGB), error bound, interval count, convergence flag and number of shadow boundaries
     found, for one pixel ray on ``[0, t1]`` (``work``: the thread's :func:`scratch`)."""
     cuts, edges = work[0], work[1]
-    n = ig.split_points(ray, 0.0, t1, ctx, cuts)
+    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated, and only there are
+    # shadow boundaries searched. The box's entry and exit are edges (split_points), so the pieces kept are the same.
+    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
+    light, tc, h = ig.peak_substitution(ray, inside, outside, ctx.lights)
+    n = ig.split_points(ray, 0.0, t1, ctx.lights, ctx.medium.params, cuts, light)
     boundary_err = 0.0
     n_geom = n
     width = bisection_width(rel_tol)
     for light in range(ig.light_count(ctx)):
-        a, b = ig.light_interval(light, ray, 0.0, t1, ctx)
+        a, b = ig.light_interval(light, ray, inside, outside, ctx.lights)
         if ig.casts_shadows(light, ctx):
             n, w = shadow_boundaries(light, a, b, shadow_samples, width, ray, ctx, cuts, n)
             boundary_err += w
@@ -264,15 +289,15 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
     edges[m] = t1
     m += 1
     edges[:m].sort()
-    # f = 0 outside the medium box (σs = 0 there): only its pieces inside the box are integrated. The box's entry and
-    # exit are edges (split_points), so the pieces kept are the same pieces.
-    inside, outside = clip_to_bounds(ctx.medium.params, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], 0.0, t1)
     k = 0
     for i in range(m):
         if inside <= edges[i] <= outside:
             edges[k] = edges[i]
             k += 1
-    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, work)
+    if h > 0.0:  # the pieces in the variable u of t = tc + h tan u (monotone: still in order)
+        for i in range(k):
+            edges[i] = math.atan((edges[i] - tc) / h)
+    total, err, used, ok = adaptive(edges, k, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc, h, work)
     # converged only where the whole bound, the boundaries' term included, is within the tolerance
     ok = ok and err + boundary_err <= max(rel_tol * max(abs(total[0]), abs(total[1]), abs(total[2])), abs_tol)
     return total, err + boundary_err, used, ok, n - n_geom
@@ -281,35 +306,38 @@ def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals
 @njit(cache=True, fastmath=False)
 def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits,
                      rule, results):
-    """Take pixels (row-major index, :func:`vlref.parallel.take` on ``taken``) until none is left and solve each
-    one's integral (:func:`pixel_integral`, in one :func:`scratch` for all of them) and view transmittance into
-    ``results`` ``(out, trans, err, used, ok, shadow_edges)``."""
+    """Take tasks of :data:`TASK_PIXELS` consecutive pixels (row-major, :func:`vlref.parallel.take` on ``taken``)
+    until none is left and solve each pixel's integral (:func:`pixel_integral`, in one :func:`scratch` for all of
+    them) and view transmittance into ``results`` ``(out, trans, err, used, ok, shadow_edges)``."""
     h, w = t_end.shape
     out, trans, err, used, ok, shadow_edges = results
-    p = take(taken)
-    if p >= h * w:
+    start = take(taken) * TASK_PIXELS
+    if start >= h * w:
         return
-    work = scratch(max_intervals, max_splits)  # only by the threads that found a pixel
-    while p < h * w:
-        y = p // w
-        x = p - y * w
-        ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
-        total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
-                                               max_intervals, rule, work)
-        out[y, x, 0], out[y, x, 1], out[y, x, 2] = total
-        err[y, x] = e
-        used[y, x] = n
-        ok[y, x] = good
-        shadow_edges[y, x] = nb
-        trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
-        p = take(taken)
+    # only by the threads that found a pixel: the work arrays and the shadow rays' traversal stack
+    work = scratch(max_intervals, max_splits)
+    ctx = ig.with_stack(ctx, traversal_stack())
+    while start < h * w:
+        for p in range(start, min(start + TASK_PIXELS, h * w)):
+            y = p // w
+            x = p - y * w
+            ray = (origin[0], origin[1], origin[2], dirs[y, x, 0], dirs[y, x, 1], dirs[y, x, 2])
+            total, e, n, good, nb = pixel_integral(ray, t_end[y, x], ctx, rel_tol, abs_tol, shadow_samples,
+                                                   max_intervals, rule, work)
+            out[y, x, 0], out[y, x, 1], out[y, x, 2] = total
+            err[y, x] = e
+            used[y, x] = n
+            ok[y, x] = good
+            shadow_edges[y, x] = nb
+            trans[y, x] = math.exp(-ig.view_optical_depth(ray, 0.0, t_end[y, x], ctx))
+        start = take(taken) * TASK_PIXELS
 
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
                       shadow_samples, max_intervals, max_splits, rule):
     """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over
-    :data:`~vlref.parallel.WORKERS` take pixels on demand (a pixel without shadow boundaries costs a few
+    :data:`~vlref.parallel.WORKERS` take tasks of pixels on demand (a pixel without shadow boundaries costs a few
     dozen integrand evaluations, one crossing several shadows hundreds: ``prange``'s static split would
     leave threads idle), with the arrays borrowed (:func:`vlref.parallel.borrowed`: no reference counts
     on the records every shadow ray reads). Which thread solves a pixel changes no bit of it."""
@@ -321,11 +349,12 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
     taken = task_counter()
+    no_stack = (np.empty(0, dtype=np.int64), np.empty(0))  # a thread that takes a pixel makes its own
     for _ in prange(WORKERS):
-        o, d, te, g, lts, shd, med, res = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
-                                                    (out, trans, err, used, ok, shadow_edges)))
-        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in), with this thread's traversal stack
-        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, traversal_stack())
+        o, d, te, g, lts, shd, med, res, st = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
+                                                        (out, trans, err, used, ok, shadow_edges), no_stack))
+        # assembled in the loop's body (Numba's parfor cannot pass nested tuples in)
+        ctx = ig.ReferenceContext(g, lts, shd, med, light_extinction, bounded, st)
         _reference_tasks(taken, o, d, te, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, max_splits, rule, res)
     return out, trans, err, used, ok, shadow_edges
 
@@ -342,7 +371,8 @@ class ReferenceResult:
     stats : counts and timings: ``intervals`` (total Gauss–Kronrod intervals), ``unconverged`` (pixels that
         hit ``max_intervals`` or the bisection floor; their ``error`` is still an honest estimate),
         ``rel_tol``, ``abs_tol``, ``shadow_samples``, ``rule``, ``seconds`` (the whole call), ``frame_seconds`` (its
-        part before the quadrature: frame, camera rays, surface distances), and ``shadow_boundaries`` (H, W) int,
+        part before the quadrature: frame, camera rays, surface distances; next to nothing where the call was given a
+        :class:`ReferenceFrame`), ``frame_reused`` (it was), and ``shadow_boundaries`` (H, W) int,
         the number of visibility changes found along each pixel ray.
     """
 
@@ -354,11 +384,51 @@ class ReferenceResult:
     stats: dict = field(default_factory=dict)
 
 
+@dataclass(frozen=True)
+class ReferenceFrame:
+    """What the quadrature of a scene's pixels reads besides its settings, prepared once by
+    :func:`prepare_reference`: :func:`render_reference` given it instead of a scene reuses it, so a sweep of
+    ``rel_tol``, ``shadow_samples`` or ``rule`` over one scene (a notebook's) pays the frame once, as a renderer
+    with its scene loaded does.
+
+    frame : :class:`vlref.render.Frame` of the scene (its ``scene`` evaluated at ``render.frame``).
+    rows : ``(y0, y1)``, the image rows prepared.  origin : (3,) the camera's position.
+    dirs : (y1 - y0, W, 3) the unit pixel directions.  t_end : (y1 - y0, W) each ray's end, ``min(surface
+    distance, render.max_distance)``.  context : :class:`~vlref.reference.integrand.ReferenceContext`.
+    seconds : the time its preparation took.
+    """
+
+    frame: Frame
+    rows: tuple[int, int]
+    origin: np.ndarray
+    dirs: np.ndarray
+    t_end: np.ndarray
+    context: ig.ReferenceContext
+    seconds: float
+
+
+def prepare_reference(scene, rows: tuple[int, int] | None = None, progress=None) -> ReferenceFrame:
+    """The :class:`ReferenceFrame` of ``scene`` (rows ``y0 <= y < y1`` of ``rows``, all when None): its frame
+    (:func:`vlref.render.prepare_frame`: camera, geometry, G-buffer, scene colour), the pixel rays and their ends."""
+    start = time.perf_counter()
+    frame = prepare_frame(scene, progress)
+    scene = frame.scene  # evaluated at render.frame (animated scenes)
+    cam = frame.camera
+    y0, y1 = rows if rows is not None else (0, scene.render.height)
+    dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])
+    surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
+    return ReferenceFrame(frame, (y0, y1), np.asarray(cam.position, dtype=np.float64), dirs,
+                          np.minimum(surface, scene.render.max_distance), ig.build_context(scene, frame),
+                          time.perf_counter() - start)
+
+
 def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_TOL, progress=None,
                      shadow_samples: int = 512, max_intervals: int = 4000,
                      rows: tuple[int, int] | None = None, rule: int = 15) -> ReferenceResult:
     """Solve the single-scattering integral of every pixel of ``scene`` (see the module docstring).
 
+    ``scene``: a scene, or a :class:`ReferenceFrame` of one (:func:`prepare_reference`), reused as it is: the same
+    result, bit for bit, as the scene's (its rows; ``rows`` must then be None);
     ``rel_tol``: target error relative to the pixel's brightest inscatter channel;
     ``abs_tol``: absolute floor (radiance units, default 1e-9) for pixels with (nearly) no inscatter;
     ``progress``: optional callable receiving stage names; ``shadow_samples`` (>= 1): visibility grid
@@ -376,30 +446,30 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     if rule not in RULES:
         raise ValueError(f"render_reference: rule must be one of {RULES} (Gauss–Kronrod nodes), not {rule}")
     start = time.perf_counter()
-    frame = prepare_frame(scene, progress)
-    scene = frame.scene  # evaluated at render.frame (animated scenes)
-    cam = frame.camera
-    y0, y1 = rows if rows is not None else (0, scene.render.height)
-    dirs = np.ascontiguousarray(cam.ray_directions()[y0:y1])
-    surface = cam.eye_depth_to_distance(frame.gbuffer.depth[y0:y1], dirs)
-    t_end = np.minimum(surface, scene.render.max_distance)
-    ctx = ig.build_context(scene, frame)
-    origin = np.asarray(cam.position, dtype=np.float64)
+    if isinstance(scene, ReferenceFrame):
+        if rows is not None:
+            raise ValueError("render_reference: rows come with the ReferenceFrame (prepare_reference's rows)")
+        prepared = scene
+    else:
+        prepared = prepare_reference(scene, rows, progress)
+    frame, (y0, y1), origin, dirs, t_end, ctx = (prepared.frame, prepared.rows, prepared.origin, prepared.dirs,
+                                                 prepared.t_end, prepared.context)
     max_splits = ig.max_split_points(ctx, shadow_samples)
     frame_seconds = time.perf_counter() - start
     # bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), sized by their shadow rays; pixels are
     # independent
-    work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID) * max(1, len(scene.lights))
+    work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID * int(rule) // 15) * max(1, len(frame.scene.lights))
     # ctx without its stack: each thread makes its own
-    bands = [_reference_kernel(origin, dirs[y0:y1], t_end[y0:y1], *ctx[:-1], float(rel_tol), float(abs_tol),
+    bands = [_reference_kernel(origin, dirs[b0:b1], t_end[b0:b1], *ctx[:-1], float(rel_tol), float(abs_tol),
                                int(shadow_samples), int(max_intervals), max_splits, int(rule))
-             for y0, y1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
-    inscatter, trans, err, used, ok, edges = (np.concatenate(parts) for parts in zip(*bands))
+             for b0, b1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
+    inscatter, trans, err, used, ok, edges = (np.concatenate(parts) if len(parts) > 1 else parts[0]
+                                              for parts in zip(*bands))
     if progress is not None:
         progress("reference")
     final = trans[..., None] * frame.scene_colour[y0:y1] + inscatter
     stats = {"intervals": int(used.sum()), "unconverged": int((~ok).sum()), "rel_tol": rel_tol,
              "abs_tol": abs_tol, "shadow_samples": shadow_samples, "rule": rule, "seconds": time.perf_counter() - start,
-             "frame_seconds": frame_seconds,
+             "frame_seconds": frame_seconds, "frame_reused": prepared is scene,
              "shadow_boundaries": edges}
     return ReferenceResult(inscatter, trans, final, err, float(err.max(initial=0.0)), stats)
