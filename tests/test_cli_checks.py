@@ -345,6 +345,21 @@ def test_a_compiling_kernel_is_announced_once(capsys):
     assert err.count("vlref: compiling kernels (first run, cached afterwards") == 1
 
 
+def test_a_bar_drawn_by_the_compiling_line_is_cleared_before_the_next_line(capsys):
+    """The compiling line (``tqdm.write``) draws a bar still inside its one-second delay; closing it must clear it,
+    or the note printed next follows the bar's text on one line (seen in the render's note test, cold cache)."""
+    import sys
+
+    from vlref.cli.progress_bar import StageBar
+
+    with StageBar(False, 5, "render x") as bar:
+        bar.stage("one")
+        bar.compiling()
+    print("vlref: note: next", file=sys.stderr)
+    err = capsys.readouterr().err
+    assert "vlref: note: next" in err.splitlines(), repr(err)
+
+
 def test_the_stage_bar_starts_no_monitor_thread():
     """tqdm's monitor thread redraws a bar without its lock, so a redraw could follow the bar's closing and put
     the bar's text in front of the next line printed (a note); the stage bars are moved by hand and start none."""

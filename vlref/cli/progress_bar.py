@@ -40,7 +40,12 @@ class StageBar:
         self._show(done, total, "row", f"{self.desc}, {self.unit} {self.done + 1}/{self.stages}")
 
     def close(self) -> None:
+        """Close the bar and clear its line. ``tqdm.write`` (the :meth:`compiling` line) draws every bar of the
+        stream, one still inside its ``delay`` too; tqdm's ``close`` then takes that bar for one never drawn and
+        leaves its text, and the next line printed (a note) followed it on one line. So the line is cleared
+        here first (a carriage return where nothing was drawn)."""
         if self.bar is not None:
+            self.bar.clear()
             self.bar.close()
             self.bar = None
 
