@@ -153,3 +153,25 @@ def test_the_render_program_imports_numba_without_yaml_unless_numba_has_a_file_t
                                "yaml works": True}
     (tmp_path / ".numba_config.yaml").unlink()
     assert state("scenes")["yaml imported"]  # another command: Numba's import as always
+
+
+AHEAD_PROCESS = r"""
+import json, sys
+import numba.core.entrypoints
+import vlref.ahead as ahead
+stages = []
+ahead.compile_stage = lambda stage, scene: stages.append(stage)  # what it compiles: tests/test_progress_interrupts.py
+ahead._compile_stage_process("march", None)
+from numba.core.typing import cffi_utils
+print(json.dumps({"stages": stages, "numba initialised": "numba.np.arraymath" in sys.modules,  # refresh() imports it
+                  "cffi imported": "cffi" in sys.modules, "scipy.linalg": "scipy.linalg" in sys.modules,
+                  "numba cffi support": cffi_utils.SUPPORTED,
+                  "extensions loaded": numba.core.entrypoints._already_initialized}))
+"""
+
+
+def test_a_compile_ahead_process_initialises_numba_as_the_render_programs_own_process():
+    """The process :func:`vlref.ahead.compile_ahead` starts runs vlref's kernels alone: Numba initialised before its
+    stage compiles, without scipy.linalg, cffi and the extension scan (it starts behind the main process)."""
+    assert _state(AHEAD_PROCESS) == {"stages": ["march"], "numba initialised": True, "cffi imported": False,
+                                     "scipy.linalg": False, "numba cffi support": False, "extensions loaded": True}

@@ -8,7 +8,11 @@ from numba import njit, prange, types
 from numba.core.errors import TypingError
 
 from vlref.lights.pack import PackedLights
-from vlref.parallel import COUNTER, WORKERS, borrowed, take, work
+from vlref.geometry.raycast import _raycast_kernel
+from vlref.lights.shading import _shade
+from vlref.lights.shadow_cast import _cast_face
+from vlref.march.physical import _march_kernel
+from vlref.parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 
 
 @njit(parallel=True)
@@ -36,6 +40,34 @@ def test_every_task_is_taken_exactly_once(n_tasks, threads):
         numba.set_num_threads(before)
     assert np.all(hits == 1)
     assert np.all((owner >= 0) & (owner < WORKERS))
+
+
+@njit(parallel=True)
+def _take_all_counted(n_tasks, hits):
+    taken = task_counter()
+    for _ in prange(WORKERS):
+        while True:
+            task = take(taken)
+            if task >= n_tasks:
+                break
+            hits[task] += 1
+
+
+def _parfors(kernel):
+    return len(kernel.overloads[kernel.signatures[0]].metadata["parfor_diagnostics"].initial_parfors)
+
+
+def test_a_task_counter_adds_no_parfor_to_a_kernel():
+    """``np.zeros`` in a parallel kernel is a parfor (a gufunc) of its own; ``task_counter`` is a call: the kernel
+    lowers its ``prange`` alone. vlref's kernels that take tasks make their counter with it."""
+    hits = np.zeros(100, dtype=np.int64)
+    _take_all_counted(100, hits)
+    _take_all(100, np.zeros(100, dtype=np.int64), np.zeros(100, dtype=np.int64))
+    assert np.all(hits == 1) and task_counter()[0] == 0
+    assert _parfors(_take_all_counted) == 1 and _parfors(_take_all) == 2
+    for kernel in (_raycast_kernel, _shade, _cast_face, _march_kernel):
+        names = kernel.py_func.__code__.co_names
+        assert "task_counter" in names and "zeros" not in names, kernel
 
 
 def test_take_counts_up_from_the_counter():

@@ -43,9 +43,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from .errors import InputError
+from .jit import njit
 from .numeric import cast, exp, expm1
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",

@@ -26,7 +26,8 @@ generates machine code for each module it builds, callees included: a ``prange``
 gufunc, its two wrappers, the kernel), so the work's call tree was optimised and code-generated four more
 times in every parallel kernel (a cold compile of the march: 4.9 s of its 12 s of LLVM; BENCHMARKS.md "Cold first
 render on two cores, second round"). The kernels take the work as an argument instead, a Numba first-class
-function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types): the
+function (:class:`Work`: the address of its C wrapper, compiled once for the kernel's argument types; the work
+function is declared ``vlref.jit.njit(..., by_address=True)``, which compiles that wrapper and no CPython one): the
 shell calls it through that address, and only the work's own module holds its code. The work runs its own
 module's machine code (optimised once instead of again in every caller: IEEE arithmetic either way, the same
 bits), one indirect call per worker. The work borrows its arrays itself (a ``borrowed`` tuple in the ``prange``
@@ -37,22 +38,36 @@ is printed, not propagated (the kernels check their arguments before the ``prang
 from __future__ import annotations
 
 import numba
+import numpy as np
 from numba.core import cgutils, types
 from numba.core.errors import TypingError
 from numba.core.types.function_type import WrapperAddressProtocol
 from numba.core.typing import signature
 from numba.extending import intrinsic
 
+from .jit import njit
+
 try:  # Numba's own typing cache key: what its dispatcher looks up a value's type by, in C (~0.2 µs)
     from numba._dispatcher import compute_fingerprint
 except ImportError:  # a Numba without it: the key is the type itself
     compute_fingerprint = None
 
-__all__ = ["WORKERS", "COUNTER", "take", "borrowed", "Work", "work"]
+__all__ = ["WORKERS", "COUNTER", "task_counter", "take", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
 COUNTER = types.Array(types.int64, 1, "C")
-"""The Numba type of the task counter of :func:`take` (``np.zeros(1, dtype=np.int64)``), for :func:`work`."""
+"""The Numba type of the task counter of :func:`take` (:func:`task_counter`), for :func:`work`."""
+
+
+@njit(cache=True, fastmath=False)
+def task_counter():
+    """A new task counter for :func:`take` (a 1-element int64 array holding 0). A kernel calls it rather than
+    writing ``np.zeros(1, dtype=np.int64)``: in a ``parallel=True`` function Numba turns ``np.zeros`` into a parfor
+    of its own, one more gufunc to compile per kernel (BENCHMARKS.md "A cold render compiles fewer wrappers and
+    parfors"), while a call is compiled once, here, without ``parallel``."""
+    counter = np.empty(1, dtype=np.int64)
+    counter[0] = 0
+    return counter
 
 
 @intrinsic
@@ -115,6 +130,9 @@ class Work(WrapperAddressProtocol):
         self._sig = sig
         result = function.get_compile_result(sig)  # compiles or loads from the cache now, not while unboxing
         self._address = result.library.get_pointer_to_function(result.fndesc.llvm_cfunc_wrapper_name)
+        if not self._address:  # a call through it would jump to address 0
+            raise TypeError(f"work: {function.py_func.__qualname__} has no C wrapper: compile it with "
+                            "vlref.jit.njit(..., by_address=True)")
 
     def __wrapper_address__(self) -> int:
         return self._address

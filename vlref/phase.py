@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from .jit import njit
 from .numeric import cast
 
 INV_4PI = 1.0 / (4.0 * math.pi)

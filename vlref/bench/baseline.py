@@ -20,8 +20,9 @@ so the samples/s ratio compares the same computation.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_INV_RANGE2, F_PX, F_PY,
                            F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ)
 from ..lights.shadow_pack import S_OFFSET, S_RES, S_STRENGTH

@@ -16,8 +16,9 @@ import math
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..numeric import exp
 from .config import THREADS, BenchConfig, median_time
 

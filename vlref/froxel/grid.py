@@ -28,7 +28,8 @@ column, slice, channel]``. :func:`grid_image` turns it into a 2-D image for EXR 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+
+from ..jit import njit
 
 __all__ = ["column_rays", "slice_depths", "depth_to_slice", "slice_to_depth", "halton", "jitter_offsets", "grid_image",
            "grid_from_image", "HALTON_BASES"]

@@ -28,8 +28,9 @@ from __future__ import annotations
 
 import math
 
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.pack import I_KIND, KIND_DIRECTIONAL
 from ..lights.shading import light_incidence
 from ..lights.shadow_lookup import shadow_visibility

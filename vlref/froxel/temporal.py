@@ -36,9 +36,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..camera import Camera
+from ..jit import njit
 from .grid import depth_to_slice
 
 __all__ = ["History", "reproject_blend", "tile_depth"]

@@ -29,8 +29,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from .primitives import hit_triangle
 
 __all__ = ["Bvh", "build_bvh", "build_box_bvh", "traversal_stack", "ray_box", "enter_root", "descend", "pop_nearer",

@@ -22,8 +22,8 @@ Same results as a linear scan, bit for bit:
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from .bvh import Bvh, build_box_bvh, descend, enter_root, next_leaf, pop_nearer
 from .primitives import hit_primitive
 

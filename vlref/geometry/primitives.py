@@ -42,9 +42,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ..camera import euler_matrix
+from ..jit import njit
 
 __all__ = ["PLANE", "SPHERE", "BOX", "CYLINDER", "ROW", "pack_plane", "pack_sphere", "pack_box",
            "pack_cylinder", "hit_plane", "hit_sphere", "hit_box", "hit_cylinder", "hit_primitive",

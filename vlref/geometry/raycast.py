@@ -34,10 +34,11 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..camera import Camera
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..jit import njit
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
@@ -138,7 +139,7 @@ def without_tree(geo: GeoArrays) -> GeoArrays:
                         pnode_count=geo.pnode_count[:0], pnode_prims=geo.pnode_prims[:0])
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, by_address=True)
 def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
     (:func:`closest_hits`; those outside the row's span of :func:`tree_spans` against ``outside``, the geometry
@@ -185,7 +186,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
     """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
     :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     for _ in prange(WORKERS):
         cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 

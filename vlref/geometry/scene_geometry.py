@@ -57,8 +57,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..parallel import borrowed
 from ..scene.model import Box, Mesh, Plane, Scene, Sphere
 from .bvh import Bvh, build_bvh, bvh_closest, bvh_transmittance, traversal_stack

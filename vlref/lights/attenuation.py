@@ -21,8 +21,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
+from ..jit import njit
 from ..numeric import cast
 from ..scene.model import ATTENUATIONS
 from .cookies import filter_taps

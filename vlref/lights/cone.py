@@ -21,8 +21,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
-
+from ..jit import njit
 from ..numeric import cast
 from ..scene.model import CONE_LAWS
 

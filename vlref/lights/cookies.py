@@ -31,9 +31,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ..errors import InputError
+from ..jit import njit
 
 __all__ = ["WRAP_CODES", "FILTER_CODES", "load_cookie", "filter_taps", "sample_texture", "spot_cookie_uv",
            "directional_cookie_uv"]

@@ -27,11 +27,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import inline_shadow_transmittance, traversal_stack
+from ..jit import njit
 from ..numeric import cast
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
 from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
@@ -109,7 +110,7 @@ def light_incidence(lights, k, x, y, z):
     return lx, ly, lz, dist, er, eg, eb
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, by_address=True)
 def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
                 ambient, sky, out):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left, each pixel's scene colour
@@ -164,7 +165,7 @@ def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj
     :func:`vlref.parallel.work`), which borrows the arrays (as the G-buffer's ray cast does,
     :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads counting references to the same
     geometry arrays on every shadow ray contend for their counters)."""
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     for _ in prange(WORKERS):
         shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
                    ambient, sky, out)

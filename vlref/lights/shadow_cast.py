@@ -23,11 +23,12 @@ import itertools
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..camera import Camera
 from ..geometry import EVERY_SURFACE, OPAQUE_ONLY, RAY_CHUNK, closest_hits, shadow_transmittance, traversal_stack
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..jit import njit
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ, I_KIND,
                    KIND_POINT, KIND_SPOT, PackedLights)
 from .shadow_pack import (CUBE_AXES, CUBE_FACES, FILTER_MODES, NSF, NSI, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
@@ -92,7 +93,7 @@ def _face_ray(face, ortho, res, k):
             start, max(face[FACE_LIMIT] - start, 0.0))
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, by_address=True)
 def _cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out, tint):
     """Chunks of ``RAY_CHUNK`` texels of one face taken one at a time (:func:`vlref.parallel.take`) until none is
     left: each texel's ray (:func:`_face_ray`), the chunk's first opaque hits (:func:`closest_hits`) stored as
@@ -137,7 +138,7 @@ def _cast_face(geo, face, ortho, res, bias, slope_bias, want_tint, out, tint, ca
     none before ``tmax``), stored as float32; with ``want_tint`` the first transparent surface and its colour.
     Every worker casts the chunks it takes (``cast_chunks``: :func:`_cast_chunks` by address,
     :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     for _ in prange(WORKERS):
         cast_chunks(taken, geo, face, ortho, res, bias, slope_bias, want_tint, out, tint)
 

@@ -16,9 +16,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
 from ..geometry import shadow_transmittance
+from ..jit import njit
 from .pack import (F_DX, F_DY, F_DZ, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UX, F_UY, F_UZ,
                    KIND_DIRECTIONAL, KIND_SPOT)
 from .shadow_pack import (S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES, S_STRENGTH, SHADOW_EXACT,

@@ -8,9 +8,10 @@ verdict, :mod:`vlref.oracle.verdict`).
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import OPAQUE_ONLY, RAY_CHUNK, closest_hits, traversal_stack
+from ..jit import njit
 from .shadow_cast import biased_distances
 from .shadow_lookup import map_lit
 

@@ -20,8 +20,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.shading import light_incidence
 from ..lights.shadow_lookup import shadow_visibility
 from ..lights.pack import I_KIND

@@ -16,7 +16,8 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numba import njit
+
+from ..jit import njit
 
 PATTERNS = ("none", "bayer2", "bayer4", "bayer8", "hash")
 

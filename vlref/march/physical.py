@@ -102,8 +102,9 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.attenuation import UNITY, analytic_attenuation, distance_attenuation
 from ..lights.cone import CONE_LINEAR, CONE_UNITY, cone_falloff, cone_polynomial
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
@@ -119,7 +120,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
-from ..parallel import COUNTER, WORKERS, borrowed, take, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..phase import hg
 from .segments import light_segment
 
@@ -580,7 +581,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
         per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = lane3(s, R_L, m)
 
 
-@njit(cache=True, fastmath=False, error_model="numpy")
+@njit(cache=True, fastmath=False, error_model="numpy", by_address=True)
 def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights, shadows,
                  geo, per_light, transmittance):
     """Take tasks, tiles of ``TILE_W x TILE_H`` pixels of the rows ``rows = (first, end)`` in row-major order of
@@ -680,7 +681,7 @@ def _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, 
                 raise ValueError("march_physical: a light has exact shadows, and geo is None")
     if not 0 <= rows[0] <= rows[1] <= t_end.shape[0]:
         raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     for _ in prange(WORKERS):
         march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights,
                     shadows, geo, per_light, transmittance)

@@ -28,8 +28,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.attenuation import distance_attenuation
 from ..lights.cone import cone_falloff
 from ..lights.cookies import sample_texture, spot_cookie_uv

@@ -18,8 +18,9 @@ inject their own buffer (``techniques.urp.jitter_path``) or compare statisticall
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from ..jit import njit
 from ..lights.pack import KIND_DIRECTIONAL
 from ..lights.shadow_lookup import shadow_visibility
 from ..phase import hg

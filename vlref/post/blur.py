@@ -25,8 +25,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import get_num_threads, njit, prange
+from numba import get_num_threads, prange
 
+from vlref.jit import njit
 from vlref.numeric import arrays_do_not_overlap, glibc_exp, glibc_exp_normal, prefer_wide_vectors
 from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map

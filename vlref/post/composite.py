@@ -20,8 +20,9 @@ Storage rounding (SOURCES §6.9) -- apply after the pass that writes the buffer:
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from vlref.jit import njit
 from vlref.post.resolution import check_choice
 
 FP16_MAX = 65504.0

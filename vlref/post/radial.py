@@ -26,10 +26,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from vlref.jit import njit
 from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
-from vlref.parallel import WORKERS, borrowed, take
+from vlref.parallel import WORKERS, borrowed, take, task_counter
 from vlref.post.resolution import check_choice
 
 ADDRESS_MODES = ("clamp", "repeat", "border")
@@ -236,7 +237,7 @@ def _radial_tiles(img, H, W, loop, mode):
     out = np.empty((H, W, img.shape[2]))
     bands = (W + RADIAL_TILE - 1) // RADIAL_TILE
     tile_w = (W + bands - 1) // bands
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     for _ in prange(WORKERS):
         im, o = borrowed((img, out))
         _radial_tasks(im, H, W, loop, mode, tile_w, taken, o)

@@ -19,8 +19,9 @@ stays bit-for-bit constant; GPUs quantise ``t`` to about 8 bits [K] (exact for `
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
+from vlref.jit import njit
 from vlref.post.blur import depth_delta_at
 from vlref.post.resolution import (bilinear_footprint, check_positive, nearest_index, uv_row_map,
                                    uv_rows)

@@ -36,9 +36,9 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
 from ..geometry import inline_shadow_transmittance, traversal_stack
+from ..jit import njit
 from ..lights import pack as lp
 from ..lights.shading import light_incidence
 from ..lights.shadow_lookup import apply_strength

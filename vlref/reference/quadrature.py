@@ -56,14 +56,15 @@ from dataclasses import dataclass, field
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..geometry import traversal_stack
+from ..jit import njit
 from ..medium import clip_to_bounds
 from ..render import Frame, prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
-from ..parallel import WORKERS, borrowed, take
+from ..parallel import WORKERS, borrowed, take, task_counter
 from ..progress import bands_for, row_bands
 
 __all__ = ["ReferenceResult", "ReferenceFrame", "prepare_reference", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
@@ -347,7 +348,7 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     used = np.zeros((h, w), dtype=np.int64)
     ok = np.ones((h, w), dtype=np.bool_)
     shadow_edges = np.zeros((h, w), dtype=np.int64)
-    taken = np.zeros(1, dtype=np.int64)
+    taken = task_counter()
     no_stack = (np.empty(0, dtype=np.int64), np.empty(0))  # a thread that takes a pixel makes its own
     for _ in prange(WORKERS):
         o, d, te, g, lts, shd, med, res, st = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,

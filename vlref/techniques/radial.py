@@ -27,11 +27,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import prange
 
 from ..camera import camera_from_settings
 from ..errors import InputError
 from ..geometry import raycast, shadow_transmittance
+from ..jit import njit
 from ..post.composite import composite_add
 from ..post.radial import (disenone_exposure, disenone_scatter, light_screen_uv, occlusion_opaque,
                            occlusion_transparent, radial_blur, radiate)
