@@ -70,7 +70,8 @@ class Bar(cli_render.StageBar):
 cli_render.StageBar = Bar
 
 if __name__ == "__main__":
-    with open("/sys/kernel/mm/transparent_hugepage/enabled") as a, open("/sys/kernel/mm/transparent_hugepage/defrag") as b:
+    THP = "/sys/kernel/mm/transparent_hugepage/"
+    with open(THP + "enabled") as a, open(THP + "defrag") as b:
         print("THP", a.read().strip(), "| defrag", b.read().strip())
     print("import", round(t1 - t0, 3), flush=True)
     scene = bench_scene(1920, 1080, 64, "four", 1024)
