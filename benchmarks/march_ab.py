@@ -20,7 +20,7 @@ import sys
 
 from vlref.bench.config import FULL, bench_scene, median_time
 from vlref.bench.march import march_samples
-from vlref.post.composite import composite_physical, sum_lights
+from vlref.post.composite import sum_and_composite
 from vlref.render import prepare_frame
 from vlref.scene.technique_params import resolved
 from vlref.techniques import physical
@@ -49,12 +49,11 @@ def split(label: str, repeats: int = 3) -> None:
                                           frame.geometry.arrays, resolved(scene, "steps"), resolved(scene, "sampling"))
 
         per_light, trans = march()
-        inscatter = sum_lights(per_light)
         row = {"label": label, "scene": name, "precision": "float64", "split": {
             "render": median_time(lambda: physical.render(scene, frame), repeats),
             "march_buffers": median_time(march, repeats),
-            "sum_lights": median_time(lambda: sum_lights(per_light), repeats),
-            "composite": median_time(lambda: composite_physical(frame.scene_colour, trans, inscatter), repeats)}}
+            "sum_and_composite": median_time(lambda: sum_and_composite(per_light, frame.scene_colour, trans),
+                                             repeats)}}
         print(label, name, " ".join(f"{k} {v:.4f} s" for k, v in row["split"].items()), flush=True)
         _write(row)
 

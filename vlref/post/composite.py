@@ -69,38 +69,15 @@ def _composite(scene, trans, light, out):
                 out[i, j, k] = scene[i, j, k] * trans[i, j] + light[i, j, k]
 
 
-def sum_lights(per_light: np.ndarray) -> np.ndarray:
-    """``Σ_k per_light[k]`` over the first axis in light order (``((L_0 + L_1) + L_2) + …``, in the buffers'
-    dtype: the same bits as NumPy's ``per_light.sum(axis=0)``), rows in parallel; zeros without lights."""
-    per_light = np.ascontiguousarray(per_light)
-    out = np.empty(per_light.shape[1:], dtype=per_light.dtype)
-    if per_light.shape[0] == 0:
-        out[...] = 0
-    else:
-        _sum_lights(per_light.reshape(per_light.shape[0], per_light.shape[1], -1),
-                    out.reshape(per_light.shape[1], -1))
-    return out
-
-
-@njit(cache=True, fastmath=False, parallel=True)
-def _sum_lights(per_light, out):
-    n, h, w = per_light.shape
-    for i in prange(h):
-        for j in range(w):
-            acc = per_light[0, i, j]
-            for k in range(1, n):
-                acc += per_light[k, i, j]
-            out[i, j] = acc
-
-
 def sum_and_composite(per_light: np.ndarray, scene, transmittance) -> tuple[np.ndarray, np.ndarray]:
-    """``(inscatter, final)``: :func:`sum_lights` of ``per_light`` (n, H, W, 3) and :func:`composite_physical` of
-    ``scene``, ``transmittance`` and that sum, the same bits as the two calls, in one parallel pass over the rows
-    (one kernel to load in a fresh process instead of two, the sum read back from registers, not memory)."""
+    """``(inscatter, final)``: the lights' sum ``Σ_k per_light[k]`` of ``per_light`` (n, H, W, 3), in light order
+    (``((L_0 + L_1) + L_2) + …``) in the buffers' dtype (the same bits as NumPy's ``per_light.sum(axis=0)``; zeros
+    without lights), and :func:`composite_physical` of ``scene``, ``transmittance`` and that sum (the same bits), in
+    one parallel pass over the rows (one kernel to load in a fresh process, the sum read back from registers)."""
     per_light = np.ascontiguousarray(per_light)
     scene = np.ascontiguousarray(scene, dtype=np.float64)
     if per_light.shape[0] == 0:
-        inscatter = sum_lights(per_light)
+        inscatter = np.zeros(per_light.shape[1:], dtype=per_light.dtype)
         return inscatter, composite_physical(scene, transmittance, inscatter)
     if per_light.shape[1:] != scene.shape:
         raise ValueError(f"inscatter: shape {per_light.shape[1:]} does not match image {scene.shape}")
@@ -117,7 +94,7 @@ def _sum_composite(per_light, scene, trans, inscatter, final):
     for i in prange(h):
         for j in range(w):
             for k in range(c):
-                acc = per_light[0, i, j, k]  # in the buffers' dtype, lights in order (as _sum_lights)
+                acc = per_light[0, i, j, k]  # in the buffers' dtype, lights in order
                 for m in range(1, n):
                     acc += per_light[m, i, j, k]
                 inscatter[i, j, k] = acc
