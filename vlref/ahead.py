@@ -26,6 +26,7 @@ import dataclasses
 import multiprocessing
 from typing import Callable, Iterator
 
+import numba
 import numpy as np
 
 from .camera import camera_from_settings
@@ -116,8 +117,6 @@ def _compile_stage_process(stage: str, scene) -> None:
 def _march_wanted(dtype, rays: bool):
     """The march's cache entries for ``dtype`` and the shadow-ray variant (``rays``): its argument ``geo`` is
     None without the ray tracer."""
-    import numba
-
     want = numba.typeof(np.zeros(3, dtype=dtype))
     geo = 8  # _march_kernel's argument ``geo``
     return lambda sig: len(sig) > geo and sig[0] == want and (sig[geo] != numba.types.none) == rays
