@@ -26,7 +26,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import prange
+from llvmlite import ir
+from numba import prange, types
+from numba.extending import intrinsic
 
 from vlref.jit import njit
 from vlref.numeric import arrays_do_not_overlap, prefer_wide_vectors
@@ -154,6 +156,56 @@ def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
             acc[ch, x] = acc[ch, x] + (top + ty * (bottom - top)) * w
 
 
+@intrinsic
+def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
+    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples start
+    at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
+    three channels; ``ra``, ``rb``, ``a``, ``b``, ``k`` unsigned element indices). :func:`_fetch_add`'s operations
+    in its order, in one 3-lane vector for the three channels: each texel is one contiguous read of three values
+    (where a vectorised pixel loop gathers 12 values one lane at a time). ``acc`` holds the pixel's sums in
+    ``acc[k : k + 4]`` (its fourth value, padding, stays 0). LLVM IR without ``fast`` flags: IEEE operations per
+    lane, the bits of the scalar loop. njit only."""
+    if not (isinstance(flat, types.Array) and flat.dtype == types.float64 and isinstance(acc, types.Array)
+            and acc.dtype == types.float64):
+        return None
+
+    def codegen(context, builder, signature, args):
+        flat_, ra_, rb_, a_, b_, tx_, ty_, w_, acc_, k_ = args
+        f64 = ir.DoubleType()
+        v3, v4, i32 = ir.VectorType(f64, 3), ir.VectorType(f64, 4), ir.IntType(32)
+        data = context.make_array(signature.args[0])(context, builder, flat_).data
+        sums = context.make_array(signature.args[8])(context, builder, acc_).data
+
+        def texel(row, column):
+            at = builder.gep(data, [builder.add(row, column)], inbounds=True)
+            return builder.load(builder.bitcast(at, v3.as_pointer()), align=8)
+
+        def splat(x):
+            one = builder.insert_element(ir.Constant(v3, None), x, ir.Constant(i32, 0))
+            return builder.shuffle_vector(one, ir.Constant(v3, None), ir.Constant(ir.VectorType(i32, 3), [0, 0, 0]))
+
+        t00, t10, t01, t11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
+        txv = splat(tx_)
+        top = builder.fadd(t00, builder.fmul(txv, builder.fsub(t10, t00)))
+        bottom = builder.fadd(t01, builder.fmul(txv, builder.fsub(t11, t01)))
+        value = builder.fmul(builder.fadd(top, builder.fmul(splat(ty_), builder.fsub(bottom, top))), splat(w_))
+        padded = builder.shuffle_vector(value, ir.Constant(v3, [0.0, 0.0, 0.0]),
+                                        ir.Constant(ir.VectorType(i32, 4), [0, 1, 2, 3]))
+        at = builder.bitcast(builder.gep(sums, [k_], inbounds=True), v4.as_pointer())
+        builder.store(builder.fadd(builder.load(at, align=8), padded), at, align=8)
+        return context.get_dummy_value()
+
+    return types.none(flat, ra, rb, a, b, tx, ty, w, acc, k), codegen
+
+
+@njit(cache=True, fastmath=False)
+def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
+    """:func:`_tap_rows` for three channels, pixel by pixel (:func:`_rgb_bilinear_add`): the sums of pixel ``x`` in
+    ``acc[4x : 4x + 3]``."""
+    for x in range(n):
+        _rgb_bilinear_add(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
+
+
 @njit(cache=True, fastmath=False)
 def _row_index(yf, n, lo, hi, offset, repeat):
     """Array row of texel row ``yf`` (an integral float) of ``n``: ``yf mod n`` when ``repeat``, else
@@ -184,7 +236,9 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
     repeat = mode == ADDRESS_REPEAT
     u, du, tx = np.empty(tile_w), np.empty(tile_w), np.empty(tile_w)
     ia, ib = np.empty(tile_w, np.uint64), np.empty(tile_w, np.uint64)
+    rgb = C == 3
     acc = np.empty((C, tile_w))
+    acc_rgb = np.empty(4 * tile_w)
     while first < tiles:
         for tile in range(first, min(first + RADIAL_RUN, tiles)):
             y = tile % H
@@ -194,6 +248,7 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
                 u[x] = (x0 + x + 0.5) / W
                 du[x] = (u[x] - lu) * scale
             acc[:] = 0.0
+            acc_rgb[:] = 0.0
             v = (y + 0.5) / H
             dv = (v - lv) * scale
             w = 1.0
@@ -210,10 +265,14 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
                 ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
                 rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
                 _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
-                _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+                if rgb:
+                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb)
+                else:
+                    _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
             for x in range(n):
                 for ch in range(C):
-                    out[y, x0 + x, ch] = (acc[ch, x] * exposure) * visibility
+                    total = acc_rgb[4 * x + ch] if rgb else acc[ch, x]
+                    out[y, x0 + x, ch] = (total * exposure) * visibility
         first = take(taken) * RADIAL_RUN
 
 
