@@ -184,7 +184,29 @@ def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
             one = builder.insert_element(ir.Constant(v3, None), x, ir.Constant(i32, 0))
             return builder.shuffle_vector(one, ir.Constant(v3, None), ir.Constant(ir.VectorType(i32, 3), [0, 0, 0]))
 
-        t00, t10, t01, t11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
+        v6 = ir.VectorType(f64, 6)
+
+        def pair(row):
+            at = builder.gep(data, [builder.add(row, a_)], inbounds=True)
+            both = builder.load(builder.bitcast(at, v6.as_pointer()), align=8)
+            return (builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(i32, 3), [0, 1, 2])),
+                    builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(i32, 3), [3, 4, 5])))
+
+        adjacent = builder.icmp_unsigned("==", b_, builder.add(a_, ir.Constant(a_.type, 3)))
+        with builder.if_else(adjacent) as (then, otherwise):
+            with then:
+                (p00, p10), (p01, p11) = pair(ra_), pair(rb_)
+                from_then = builder.block
+            with otherwise:
+                q00, q10, q01, q11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
+                from_otherwise = builder.block
+        texels = []
+        for p, q in ((p00, q00), (p10, q10), (p01, q01), (p11, q11)):
+            phi = builder.phi(v3)
+            phi.add_incoming(p, from_then)
+            phi.add_incoming(q, from_otherwise)
+            texels.append(phi)
+        t00, t10, t01, t11 = texels
         txv = splat(tx_)
         top = builder.fadd(t00, builder.fmul(txv, builder.fsub(t10, t00)))
         bottom = builder.fadd(t01, builder.fmul(txv, builder.fsub(t11, t01)))
