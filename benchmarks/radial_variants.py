@@ -1,7 +1,8 @@
 """Radial-blur variants in one process (BENCHMARKS.md, "The radial blur's tile sizes and loop shapes"): copies of
 ``vlref/post/radial.py`` with one line changed each, checked bit for bit against the unchanged copy on the bench's
 input, then timed alternated (the list, then the list reversed, three rounds): 1080p, 64 taps on every core (wall
-ms) and 960x540 on one thread (CPU ns per pixel and tap). One JSON line on stdout.
+ms) and 960x540 on one thread (CPU ns per pixel and tap); with ``--scaling``, 1080p at each thread count given. One
+JSON line on stdout.
 
 Run from a tree's root (``PYTHONPATH=$PWD``); compile each copy first, in processes of their own (in parallel):
 
@@ -27,7 +28,12 @@ VARIANTS = {
     "run4": ("RADIAL_RUN = 16", "RADIAL_RUN = 4"),
     "run64": ("RADIAL_RUN = 16", "RADIAL_RUN = 64"),
     "ymm": ("    prefer_wide_vectors()\n    arrays_do_not_overlap()\n    for ch", "    arrays_do_not_overlap()\n    for ch"),
+    "gathers": ("    rgb = C == 3\n", "    rgb = False\n"),  # RGB through the per-channel gather loop, as before
+    "three_loads": ("adjacent = builder.icmp_unsigned(", "adjacent = ir.Constant(ir.IntType(1), 0) or builder.icmp_unsigned("),
 }
+"""One replaced text each (``main``: the unchanged copy). ``gathers`` and ``three_loads`` (the RGB texels read as four
+3-value loads, never six at once) are the RGB kernel's predecessors; a variant whose text is gone from radial.py
+stops with a message."""
 
 
 def variant(folder: pathlib.Path, name: str):
@@ -54,6 +60,8 @@ def main() -> None:
     parser.add_argument("phase", choices=("warm", "time"))
     parser.add_argument("folder", type=pathlib.Path)
     parser.add_argument("names", nargs="+", choices=tuple(VARIANTS))
+    parser.add_argument("--scaling", type=lambda t: [int(n) for n in t.split(",")], default=[],
+                        help="thread counts (e.g. 1,4,8,16) at which each variant then runs at 1080p (twice, alternated)")
     args = parser.parse_args()
     args.folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(0)
@@ -78,7 +86,15 @@ def main() -> None:
             start = time.process_time()
             blur(modules[name], small)
             runs[name]["ns_one_thread"].append(round((time.process_time() - start) / (540 * 960 * 65) * 1e9, 3))
-    print(json.dumps({"same_bits_as_first": same, "runs": runs}))
+    scaling = {name: {} for name in args.names}
+    for threads in args.scaling:
+        numba.set_num_threads(threads)
+        for name in order:
+            start = time.perf_counter()
+            blur(modules[name], big)
+            scaling[name].setdefault(threads, []).append(round(1e3 * (time.perf_counter() - start), 2))
+    numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
+    print(json.dumps({"same_bits_as_first": same, "runs": runs, "scaling_ms": scaling}))
 
 
 if __name__ == "__main__":
