@@ -29,11 +29,10 @@ VARIANTS = {
     "run64": ("RADIAL_RUN = 16", "RADIAL_RUN = 64"),
     "ymm": ("    prefer_wide_vectors()\n    arrays_do_not_overlap()\n    for ch", "    arrays_do_not_overlap()\n    for ch"),
     "gathers": ("    rgb = C == 3\n", "    rgb = False\n"),  # RGB through the per-channel gather loop, as before
-    "three_loads": ("adjacent = builder.icmp_unsigned(", "adjacent = ir.Constant(ir.IntType(1), 0) or builder.icmp_unsigned("),
+    "three_values": ("    if max(ra, rb) + row < np.uint64(flat.size):", "    if False:"),  # RGB texels read as 3 values
 }
-"""One replaced text each (``main``: the unchanged copy). ``gathers`` and ``three_loads`` (the RGB texels read as four
-3-value loads, never six at once) are the RGB kernel's predecessors; a variant whose text is gone from radial.py
-stops with a message."""
+"""One replaced text each (``main``: the unchanged copy). ``gathers`` and ``three_values`` (every texel read as three
+values, two loads and a shuffle) are the RGB kernel's predecessors."""
 
 
 def variant(folder: pathlib.Path, name: str):

@@ -156,76 +156,80 @@ def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
             acc[ch, x] = acc[ch, x] + (top + ty * (bottom - top)) * w
 
 
-@intrinsic
-def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
-    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples start
-    at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
-    three channels; ``ra``, ``rb``, ``a``, ``b``, ``k`` unsigned element indices). :func:`_fetch_add`'s operations
-    in its order, in one 3-lane vector for the three channels: each texel is one contiguous read of three values
-    (where a vectorised pixel loop gathers 12 values one lane at a time). ``acc`` holds the pixel's sums in
-    ``acc[k : k + 4]`` (its fourth value, padding, stays 0). LLVM IR without ``fast`` flags: IEEE operations per
-    lane, the bits of the scalar loop. njit only."""
-    if not (isinstance(flat, types.Array) and flat.dtype == types.float64 and isinstance(acc, types.Array)
-            and acc.dtype == types.float64):
-        return None
-
+def _rgb_bilinear_codegen(lanes):
+    """The code of :func:`_rgb_bilinear_add` (``lanes = 4``: each texel read as four values) or
+    :func:`_rgb_bilinear_add_near_end` (``lanes = 3``)."""
     def codegen(context, builder, signature, args):
         flat_, ra_, rb_, a_, b_, tx_, ty_, w_, acc_, k_ = args
-        f64 = ir.DoubleType()
-        v3, v4, i32 = ir.VectorType(f64, 3), ir.VectorType(f64, 4), ir.IntType(32)
+        f64, i32 = ir.DoubleType(), ir.IntType(32)
+        vector, v4 = ir.VectorType(f64, lanes), ir.VectorType(f64, 4)
         data = context.make_array(signature.args[0])(context, builder, flat_).data
         sums = context.make_array(signature.args[8])(context, builder, acc_).data
 
         def texel(row, column):
             at = builder.gep(data, [builder.add(row, column)], inbounds=True)
-            return builder.load(builder.bitcast(at, v3.as_pointer()), align=8)
+            return builder.load(builder.bitcast(at, vector.as_pointer()), align=8)
 
         def splat(x):
-            one = builder.insert_element(ir.Constant(v3, None), x, ir.Constant(i32, 0))
-            return builder.shuffle_vector(one, ir.Constant(v3, None), ir.Constant(ir.VectorType(i32, 3), [0, 0, 0]))
+            one = builder.insert_element(ir.Constant(vector, None), x, ir.Constant(i32, 0))
+            return builder.shuffle_vector(one, ir.Constant(vector, None), ir.Constant(ir.VectorType(i32, lanes), [0] * lanes))
 
-        v6 = ir.VectorType(f64, 6)
-
-        def pair(row):
-            at = builder.gep(data, [builder.add(row, a_)], inbounds=True)
-            both = builder.load(builder.bitcast(at, v6.as_pointer()), align=8)
-            return (builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(i32, 3), [0, 1, 2])),
-                    builder.shuffle_vector(both, both, ir.Constant(ir.VectorType(i32, 3), [3, 4, 5])))
-
-        adjacent = builder.icmp_unsigned("==", b_, builder.add(a_, ir.Constant(a_.type, 3)))
-        with builder.if_else(adjacent) as (then, otherwise):
-            with then:
-                (p00, p10), (p01, p11) = pair(ra_), pair(rb_)
-                from_then = builder.block
-            with otherwise:
-                q00, q10, q01, q11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
-                from_otherwise = builder.block
-        texels = []
-        for p, q in ((p00, q00), (p10, q10), (p01, q01), (p11, q11)):
-            phi = builder.phi(v3)
-            phi.add_incoming(p, from_then)
-            phi.add_incoming(q, from_otherwise)
-            texels.append(phi)
-        t00, t10, t01, t11 = texels
+        t00, t10, t01, t11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
         txv = splat(tx_)
         top = builder.fadd(t00, builder.fmul(txv, builder.fsub(t10, t00)))
         bottom = builder.fadd(t01, builder.fmul(txv, builder.fsub(t11, t01)))
         value = builder.fmul(builder.fadd(top, builder.fmul(splat(ty_), builder.fsub(bottom, top))), splat(w_))
-        padded = builder.shuffle_vector(value, ir.Constant(v3, [0.0, 0.0, 0.0]),
-                                        ir.Constant(ir.VectorType(i32, 4), [0, 1, 2, 3]))
+        if lanes == 3:
+            value = builder.shuffle_vector(value, ir.Constant(vector, [0.0, 0.0, 0.0]),
+                                           ir.Constant(ir.VectorType(i32, 4), [0, 1, 2, 3]))
         at = builder.bitcast(builder.gep(sums, [k_], inbounds=True), v4.as_pointer())
-        builder.store(builder.fadd(builder.load(at, align=8), padded), at, align=8)
+        builder.store(builder.fadd(builder.load(at, align=8), value), at, align=8)
         return context.get_dummy_value()
 
-    return types.none(flat, ra, rb, a, b, tx, ty, w, acc, k), codegen
+    return codegen
+
+
+def _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k):
+    if not (isinstance(flat, types.Array) and flat.dtype == types.float64 and isinstance(acc, types.Array)
+            and acc.dtype == types.float64):
+        return None
+    return types.none(flat, ra, rb, a, b, tx, ty, w, acc, k)
+
+
+@intrinsic
+def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
+    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples start
+    at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
+    three channels; ``ra``, ``rb``, ``a``, ``b``, ``k`` unsigned element indices). :func:`_fetch_add`'s operations
+    in its order, on a 4-lane vector: each texel is one contiguous read of four values, its RGB and the value after
+    it (the next texel's red, which must exist: ``flat`` holds at least ``max(ra, rb) + max(a, b) + 4`` values), so
+    a pixel's tap is four vector loads and 11 vector operations (where a vectorised pixel loop gathers 12 values one
+    lane at a time, and reading three values takes two loads and a shuffle each). ``acc[k : k + 4]`` holds the
+    pixel's sums, its fourth value the sum of that spare lane (never read). LLVM IR without ``fast`` flags: IEEE
+    operations per lane, the bits of the scalar loop. njit only."""
+    sig = _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k)
+    return None if sig is None else (sig, _rgb_bilinear_codegen(4))
+
+
+@intrinsic
+def _rgb_bilinear_add_near_end(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
+    """:func:`_rgb_bilinear_add` reading each texel's three values only (where the value after it may be past the end
+    of ``flat``: a tap on the image's last row); the spare lane of ``acc`` gets 0."""
+    sig = _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k)
+    return None if sig is None else (sig, _rgb_bilinear_codegen(3))
 
 
 @njit(cache=True, fastmath=False)
-def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
+def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc, row):
     """:func:`_tap_rows` for three channels, pixel by pixel (:func:`_rgb_bilinear_add`): the sums of pixel ``x`` in
-    ``acc[4x : 4x + 3]``."""
-    for x in range(n):
-        _rgb_bilinear_add(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
+    ``acc[4x : 4x + 4]``; ``row``: the values in an image row (a tap whose texel rows are followed by another reads
+    four values per texel, one on the last row three)."""
+    if max(ra, rb) + row < np.uint64(flat.size):
+        for x in range(n):
+            _rgb_bilinear_add(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
+    else:
+        for x in range(n):
+            _rgb_bilinear_add_near_end(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
 
 
 @njit(cache=True, fastmath=False)
@@ -233,6 +237,7 @@ def _row_index(yf, n, lo, hi, offset, repeat):
     """Array row of texel row ``yf`` (an integral float) of ``n``: ``yf mod n`` when ``repeat``, else
     ``clamp(yf, lo, hi) + offset`` (clamped as :func:`_tap_columns` does)."""
     return int(yf) % n if repeat else int(min(max(yf, lo), hi)) + offset
+
 
 
 RADIAL_RUN = 16
@@ -288,7 +293,7 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
                 rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
                 _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
                 if rgb:
-                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb)
+                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row)
                 else:
                     _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
             for x in range(n):
