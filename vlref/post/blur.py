@@ -29,7 +29,7 @@ from numba import get_num_threads, prange
 
 from vlref.jit import njit
 from vlref.numeric import arrays_do_not_overlap, glibc_exp, glibc_exp_normal, prefer_wide_vectors
-from vlref.parallel import WORKERS, borrowed, take, task_counter
+from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
 VL_KERNEL_RADIUS = {"full": 7, "half": 5, "quarter": 6}
@@ -342,16 +342,6 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
             _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
 
 
-@njit(cache=True, fastmath=False)
-def _bilateral_tasks(v, z, axis, g, code, factor, epsilon, blocks, taken, out):
-    """The blocks of :func:`_bilateral_lines`, taken on demand (:func:`~vlref.parallel.take`) until none is left."""
-    H = v.shape[0]
-    b = take(taken)
-    while b < blocks:
-        _bilateral_block(v, z, axis, g, code, factor, epsilon, b * H // blocks, (b + 1) * H // blocks, out)
-        b = take(taken)
-
-
 @njit(cache=True, fastmath=False, parallel=True)
 def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     """:func:`_blur_lines` for :func:`bilateral_pass`'s taps (offsets ``0, -K..-1, 1..K``, value and depth at the same
@@ -368,18 +358,17 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     (:func:`_add_tap`), and a line is summed in stretches of ``_CHUNK`` columns, all taps of a stretch before the next,
     so its sums stay in the L1 cache (summed over whole lines, each tap loaded and stored them from L2: a fifth slower
     on one thread). A line's depth tables are one array, ``K + 1`` rows per line (its centre, then ``m = 1..K``).
-    ``blocks`` blocks of rows, taken by the threads on demand (:func:`_bilateral_tasks`: a thread slowed by the
-    machine takes fewer), each with its buffers allocated once. Vertical: the
+    ``blocks`` blocks of rows in parallel, each with its buffers allocated once. Vertical: the
     depth tables of the ``K + 1`` latest rows and the planes of the ``2K + 1`` source rows around the current one are
     kept in rings; a block computes the tables and planes of the ``K`` rows above it again (the only repeated
     work). The blocks get the arrays without reference counts (:func:`~vlref.parallel.borrowed`: each row passes
     them to several functions). ``g``: the Gaussian by ``|k|``, ``K + 1`` values.
     """
-    n_items = max(1, min(v.shape[0], blocks))
-    taken = task_counter()
-    for _ in prange(WORKERS):
+    H = v.shape[0]
+    n_items = max(1, min(H, blocks))
+    for b in prange(n_items):
         vb, zb, gb, ob = borrowed((v, z, g, out))
-        _bilateral_tasks(vb, zb, axis, gb, code, factor, epsilon, n_items, taken, ob)
+        _bilateral_block(vb, zb, axis, gb, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, ob)
 
 
 def _line_buffers(v):
@@ -432,7 +421,7 @@ def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, d
     code = _weight_code(depth_weight_kind, depth_factor, epsilon)
     v3, out = _line_buffers(v)
     _bilateral_lines(v3, np.ascontiguousarray(z), axis, np.asarray(gauss, dtype=np.float64), code, float(depth_factor),
-                     float(epsilon), (8 if axis == 1 else 2) * get_num_threads(), out)
+                     float(epsilon), 2 * get_num_threads(), out)
     out = out.reshape(v.shape)
     if keep_alpha:
         out[..., -1] = v[..., -1]
