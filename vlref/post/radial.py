@@ -172,7 +172,8 @@ def _rgb_bilinear_codegen(lanes):
 
         def splat(x):
             one = builder.insert_element(ir.Constant(vector, None), x, ir.Constant(i32, 0))
-            return builder.shuffle_vector(one, ir.Constant(vector, None), ir.Constant(ir.VectorType(i32, lanes), [0] * lanes))
+            everywhere = ir.Constant(ir.VectorType(i32, lanes), [0] * lanes)
+            return builder.shuffle_vector(one, ir.Constant(vector, None), everywhere)
 
         t00, t10, t01, t11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
         txv = splat(tx_)
@@ -190,6 +191,8 @@ def _rgb_bilinear_codegen(lanes):
 
 
 def _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k):
+    """The signature of :func:`_rgb_bilinear_add` for these argument types; None (no match) unless ``flat`` and ``acc``
+    are float64 arrays."""
     if not (isinstance(flat, types.Array) and flat.dtype == types.float64 and isinstance(acc, types.Array)
             and acc.dtype == types.float64):
         return None
@@ -198,8 +201,8 @@ def _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k):
 
 @intrinsic
 def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
-    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples start
-    at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
+    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples
+    start at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
     three channels; ``ra``, ``rb``, ``a``, ``b``, ``k`` unsigned element indices). :func:`_fetch_add`'s operations
     in its order, on a 4-lane vector: each texel is one contiguous read of four values, its RGB and the value after
     it (the next texel's red, which must exist: ``flat`` holds at least ``max(ra, rb) + max(a, b) + 4`` values), so
@@ -239,7 +242,6 @@ def _row_index(yf, n, lo, hi, offset, repeat):
     return int(yf) % n if repeat else int(min(max(yf, lo), hi)) + offset
 
 
-
 RADIAL_RUN = 16
 """Consecutive tiles of :func:`_radial_tiles` taken as one task."""
 
@@ -274,8 +276,10 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
             for x in range(n):
                 u[x] = (x0 + x + 0.5) / W
                 du[x] = (u[x] - lu) * scale
-            acc[:] = 0.0
-            acc_rgb[:] = 0.0
+            if rgb:
+                acc_rgb[:] = 0.0
+            else:
+                acc[:] = 0.0
             v = (y + 0.5) / H
             dv = (v - lv) * scale
             w = 1.0
@@ -315,7 +319,8 @@ def _radial_tiles(img, H, W, loop, mode):
     threads idle). The workers get the arrays without reference counts (:func:`~vlref.parallel.borrowed`: every tap
     passes the image to a function). Per tile, taps outer and pixels inner: the row's ``v`` (and so its texel row
     pair and ``ty``) is the same for every pixel at each tap, each pixel's ``u`` is stepped by the same repeated
-    subtraction as the shaders, and the sums stay in a (C, tile) buffer. Per pixel the operations and their order
+    subtraction as the shaders, and the sums stay in a (C, tile) buffer; an RGB image's in a (tile, 4) one, a pixel's
+    three channels read and summed as one vector (:func:`_tap_rows_rgb`). Per pixel the operations and their order
     are :func:`_fetch_add`'s, so the bits are those of the pixel-by-pixel loop and independent of the thread count
     and the tiling. ``mode``: an ``ADDRESS_*`` index; under ``ADDRESS_BORDER`` ``img`` is padded with one texel of 0
     on every side (a tap outside reads 0 where the clamped index lands in the padding).
