@@ -1,4 +1,5 @@
-"""Radial-blur variants in one process (BENCHMARKS.md, "The radial blur's tile sizes and loop shapes"): copies of
+"""Radial-blur variants in one process (BENCHMARKS.md, "The radial blur's tile sizes and loop shapes", "The radial blur
+reads a texel's RGB as one vector"): copies of
 ``vlref/post/radial.py`` with one line changed each, checked bit for bit against the unchanged copy on the bench's
 input, then timed alternated (the list, then the list reversed, three rounds): 1080p, 64 taps on every core (wall
 ms) and 960x540 on one thread (CPU ns per pixel and tap); with ``--scaling``, 1080p at each thread count given. One
