@@ -215,44 +215,78 @@ def _planar_row(v, r, pad, out):
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
-def _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, end, c0, acc, wsum):
+def _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, end, c0, fresh, acc, wsum):
     """One tap on the columns ``first <= c < end`` of the stretch that starts at column ``c0``: ``w = gk *
     T[wrow, c + wshift]``, ``wsum[c - c0] += w``, ``acc[ch, c - c0] += w * rows[vrow, ch, c + vshift]`` (the indices
-    unsigned: no wrap-around select, so the loops vectorise; ``w`` recomputed per channel, the same product). Three
-    channels (RGB): one loop, ``w`` once per texel, its four sums spelled out (fewer loads and stores of the sums
-    and the weights)."""
+    unsigned: no wrap-around select, so the loops vectorise; ``w`` recomputed per channel, the same product). ``fresh``
+    (the stretch's first tap): the sums start from 0 (``0 + w``, ``0 + w v``, what adding to zeroed sums computes) in
+    place of the stored ones, so they need no zeroing pass (the stored value is read and not used: a select, no
+    branch in the loop). Three channels (RGB): one loop, ``w`` once per texel, its four sums spelled out (fewer loads
+    and stores of the sums and the weights)."""
     arrays_do_not_overlap()
     if acc.shape[0] == 3:
         for c in range(first, end):
             w, i, j = gk * T[wrow, np.uint64(c + wshift)], np.uint64(c - c0), np.uint64(c + vshift)
-            wsum[i] += w
-            acc[0, i] += w * rows[vrow, 0, j]
-            acc[1, i] += w * rows[vrow, 1, j]
-            acc[2, i] += w * rows[vrow, 2, j]
+            s, a0, a1, a2 = _sums(wsum, acc, i, fresh)
+            wsum[i] = s + w
+            acc[0, i] = a0 + w * rows[vrow, 0, j]
+            acc[1, i] = a1 + w * rows[vrow, 1, j]
+            acc[2, i] = a2 + w * rows[vrow, 2, j]
         return
     for c in range(first, end):
-        wsum[np.uint64(c - c0)] += gk * T[wrow, np.uint64(c + wshift)]
+        i = np.uint64(c - c0)
+        s = wsum[i]
+        wsum[i] = (0.0 if fresh else s) + gk * T[wrow, np.uint64(c + wshift)]
     for ch in range(acc.shape[0]):
         for c in range(first, end):
-            acc[ch, np.uint64(c - c0)] += (gk * T[wrow, np.uint64(c + wshift)]) * rows[vrow, ch, np.uint64(c + vshift)]
+            i = np.uint64(c - c0)
+            a = acc[ch, i]
+            acc[ch, i] = (0.0 if fresh else a) + (gk * T[wrow, np.uint64(c + wshift)]) * rows[vrow, ch,
+                                                                                             np.uint64(c + vshift)]
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
-def _add_rgb_taps(ga, gb, T, weights, rows, values, first, end, c0, acc, wsum):
+def _sums(wsum, acc, i, fresh):
+    """The four sums of RGB texel ``i`` of a stretch, ``(wsum, acc_r, acc_g, acc_b)``, or four zeros where ``fresh``
+    (the values are loaded either way, so the choice is a select)."""
+    s, a0, a1, a2 = wsum[i], acc[0, i], acc[1, i], acc[2, i]
+    return (0.0, 0.0, 0.0, 0.0) if fresh else (s, a0, a1, a2)
+
+
+@njit(cache=True, fastmath=False, forceinline=True)
+def _add_rgb_taps(ga, gb, T, weights, rows, values, first, end, c0, fresh, acc, wsum):
     """Two consecutive taps ``a``, ``b`` of :func:`_add_tap` on three channels in one loop: ``wsum = (wsum + w_a) + w_b``
     and ``acc = (acc + w_a v_a) + w_b v_b``, the same operations in the same order as two calls, the sums loaded and
     stored once. ``weights = (wrow_a, wshift_a, wrow_b, wshift_b)``, ``values = (vrow_a, vshift_a, vrow_b, vshift_b)``
-    (:func:`_add_tap`'s ``wrow, wshift`` and ``vrow, vshift``)."""
+    (:func:`_add_tap`'s ``wrow, wshift`` and ``vrow, vshift``); ``fresh`` as there."""
     arrays_do_not_overlap()
     wa, sa, wb, sb = weights
     va, ta, vb, tb = values
     for c in range(first, end):
         i, ja, jb = np.uint64(c - c0), np.uint64(c + ta), np.uint64(c + tb)
         w1, w2 = ga * T[wa, np.uint64(c + sa)], gb * T[wb, np.uint64(c + sb)]
-        wsum[i] = (wsum[i] + w1) + w2
-        acc[0, i] = (acc[0, i] + w1 * rows[va, 0, ja]) + w2 * rows[vb, 0, jb]
-        acc[1, i] = (acc[1, i] + w1 * rows[va, 1, ja]) + w2 * rows[vb, 1, jb]
-        acc[2, i] = (acc[2, i] + w1 * rows[va, 2, ja]) + w2 * rows[vb, 2, jb]
+        s, a0, a1, a2 = _sums(wsum, acc, i, fresh)
+        wsum[i] = (s + w1) + w2
+        acc[0, i] = (a0 + w1 * rows[va, 0, ja]) + w2 * rows[vb, 0, jb]
+        acc[1, i] = (a1 + w1 * rows[va, 1, ja]) + w2 * rows[vb, 1, jb]
+        acc[2, i] = (a2 + w1 * rows[va, 2, ja]) + w2 * rows[vb, 2, jb]
+
+
+@njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
+def _close_rgb(gk, T, wrow, wshift, rows, vrow, vshift, end, c0, fresh, acc, wsum, out, r):
+    """The stretch's last tap on three channels (:func:`_add_tap` from column ``c0``) and its end, in one loop: the
+    sums with the tap added are divided (``acc / wsum``) and written into ``out[r, c]``'s three channels, spelled
+    out into the flat line; the sums are not stored back. The same operations and order as the tap, then the
+    division (NumPy's error model, as :func:`_finish_stretch`)."""
+    arrays_do_not_overlap()
+    texels = out[r, c0:end].reshape(3 * (end - c0))
+    for c in range(c0, end):
+        w, i, j = gk * T[wrow, np.uint64(c + wshift)], np.uint64(c - c0), np.uint64(c + vshift)
+        s, a0, a1, a2 = _sums(wsum, acc, i, fresh)
+        s = s + w
+        texels[3 * i] = (a0 + w * rows[vrow, 0, j]) / s
+        texels[3 * i + 1] = (a1 + w * rows[vrow, 1, j]) / s
+        texels[3 * i + 2] = (a2 + w * rows[vrow, 2, j]) / s
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -273,35 +307,30 @@ def _tap(t, K, axis, r, H, base, c0, c1):
 @njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
 def _finish_stretch(acc, wsum, n, out, r, c0):
     """``out[r, c0 + i, ch] = acc[ch, i] / wsum[i]`` for ``i < n`` (vectorised: NumPy's error model, so a zero ``wsum``
-    would give ``inf``/NaN rather than raise; the centre tap's weight keeps it positive). Three channels (RGB) are
-    interleaved by a loop of their own with the channels spelled out into the flat line, no inner loop over them
-    (2.4 against 1.5 ms for a 960x540 pass on one dev-box thread)."""
+    would give ``inf``/NaN rather than raise; the centre tap's weight keeps it positive). Three channels (RGB) end
+    in :func:`_close_rgb` instead."""
     arrays_do_not_overlap()
     for ch in range(acc.shape[0]):
         for i in range(n):
             acc[ch, i] = acc[ch, i] / wsum[i]
     line = out[r]
-    if acc.shape[0] == 3:
-        texels = line[c0:c0 + n].reshape(3 * n)
-        for i in range(n):
-            texels[3 * i], texels[3 * i + 1], texels[3 * i + 2] = acc[0, i], acc[1, i], acc[2, i]
-    else:
-        for i in range(n):
-            for ch in range(acc.shape[0]):
-                line[c0 + i, ch] = acc[ch, i]
+    for i in range(n):
+        for ch in range(acc.shape[0]):
+            line[c0 + i, ch] = acc[ch, i]
 
 
 @njit(cache=True, fastmath=False)
 def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
     kernel small, which is most of its compile time)."""
+    prefer_wide_vectors()
     H, W, C = v.shape
     K = g.size - 1
     S = K + 1
     T = np.empty(((K + 1) * S, W))
     rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
-    acc = np.empty((C, _CHUNK))
-    wsum = np.empty(_CHUNK)
+    acc = np.zeros((C, _CHUNK))  # zeros: a fresh tap loads them and does not use them (_sums)
+    wsum = np.zeros(_CHUNK)
     flags = np.empty(W // 8 + 1, np.uint64)
     if axis == 0:
         for p in range(max(r0 - K, 0), min(r0 + K, H)):
@@ -317,29 +346,28 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
             _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
         for c0 in range(0, W, _CHUNK):
             c1 = min(c0 + _CHUNK, W)
-            for i in range(c1 - c0):
-                wsum[i] = 0.0
-            for ch in range(C):
-                for i in range(c1 - c0):
-                    acc[ch, i] = 0.0
             t = 0
             while t < 2 * K + 1:
                 k, vrow, vshift, first, wrow, wshift = _tap(t, K, axis, r, H, slot * S, c0, c1)
                 k2, vrow2, vshift2, first2, wrow2, wshift2 = _tap(min(t + 1, 2 * K), K, axis, r, H, slot * S, c0, c1)
-                if t < 2 * K and C == 3 and first == c0 and first2 == c0:
-                    _add_rgb_taps(g[abs(k)], g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
-                                  (vrow, vshift, vrow2, vshift2), first, c1, c0, acc, wsum)
+                gk = g[abs(k)]
+                if C == 3 and t == 2 * K:  # the last tap (k = K, every column) ends the stretch
+                    _close_rgb(gk, T, wrow, wshift, rows, vrow, vshift, c1, c0, t == 0, acc, wsum, out, r)
+                    break
+                if t + 1 < 2 * K and C == 3 and first == c0 and first2 == c0:
+                    _add_rgb_taps(gk, g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
+                                  (vrow, vshift, vrow2, vshift2), first, c1, c0, t == 0, acc, wsum)
                     t += 2
                     continue
-                gk = g[abs(k)]
                 for c in range(c0, first):  # tap k < 0 of column c < -k is clamped to column 0: its pair (0, c)
                     w = gk * T[slot * S + c, 0]
                     wsum[c - c0] += w
                     for ch in range(C):
                         acc[ch, c - c0] += w * rows[0, ch, K + k + c]
-                _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, acc, wsum)
+                _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, t == 0, acc, wsum)
                 t += 1
-            _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
+            if C != 3:
+                _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
