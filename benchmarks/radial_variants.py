@@ -36,19 +36,20 @@ VARIANTS = {
 values, two loads and a shuffle) are the RGB kernel's predecessors."""
 
 
-def variant(folder: pathlib.Path, name: str):
-    """The copy of radial.py with ``VARIANTS[name]``'s replacement, imported as ``radial_NAME`` from ``folder``."""
-    old, new = VARIANTS[name]
-    text = SOURCE.read_text()
+def variant(folder: pathlib.Path, name: str, source: pathlib.Path = SOURCE, change: tuple | None = None):
+    """The copy of ``source`` (radial.py) with the replacement ``change`` (``VARIANTS[name]``; ``("", "")``: none),
+    imported as ``STEM_NAME`` (``radial_NAME``) from ``folder``; benchmarks/blur_variants.py copies blur.py."""
+    old, new = VARIANTS[name] if change is None else change
+    text = source.read_text()
     if old and text.count(old) != 1:
-        raise SystemExit(f"{name}: {old!r} is not in {SOURCE} exactly once")
-    path = folder / f"radial_{name}.py"
+        raise SystemExit(f"{name}: {old!r} is not in {source} exactly once")
+    path = folder / f"{source.stem}_{name}.py"
     text = text.replace(old, new) if old else text
     if not path.exists() or path.read_text() != text:
         path.write_text(text)
     if str(folder) not in sys.path:
         sys.path.insert(0, str(folder))
-    return importlib.import_module(f"radial_{name}")
+    return importlib.import_module(f"{source.stem}_{name}")
 
 
 def blur(module, image):
