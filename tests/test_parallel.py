@@ -12,7 +12,7 @@ from vlref.geometry.raycast import _raycast_kernel
 from vlref.lights.shading import _shade
 from vlref.lights.shadow_cast import _cast_face
 from vlref.march.physical import _march_kernel
-from vlref.parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from vlref.parallel import COUNTER, MIN_THREAD_PIXELS, WORKERS, borrowed, take, task_counter, team, work
 
 
 @njit(parallel=True)
@@ -68,6 +68,41 @@ def test_a_task_counter_adds_no_parfor_to_a_kernel():
     for kernel in (_raycast_kernel, _shade, _cast_face, _march_kernel):
         names = kernel.py_func.__code__.co_names
         assert "task_counter" in names and "zeros" not in names, kernel
+
+
+@njit(parallel=True)
+def _take_all_workers(n_tasks, hits, workers):
+    taken = task_counter()
+    for _ in prange(workers):
+        while True:
+            task = take(taken)
+            if task >= n_tasks:
+                break
+            hits[task] += 1
+
+
+@pytest.mark.parametrize("tasks, pixels, size", [(0, None, 1), (1, None, 1), (5, None, 2), (5, 0, 1),
+                                                 (5, MIN_THREAD_PIXELS, 1), (5, 2 * MIN_THREAD_PIXELS - 1, 1),
+                                                 (5, 2 * MIN_THREAD_PIXELS, 2), (1, 10 * MIN_THREAD_PIXELS, 1)])
+def test_a_team_has_a_thread_per_task_and_per_min_thread_pixels_and_takes_every_task(tasks, pixels, size):
+    """Two threads (where Numba has them): ``team`` lowers Numba's thread count to its size inside the block (one
+    thread per task, per MIN_THREAD_PIXELS pixels, at least one) and restores it after, an error included; its
+    workers take every task."""
+    threads = min(2, numba.config.NUMBA_NUM_THREADS)
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        with team(tasks, pixels) as workers:
+            assert workers == min(size, threads) == numba.get_num_threads()
+            hits = np.zeros(7 * tasks, dtype=np.int64)
+            _take_all_workers(hits.size, hits, workers)
+            assert np.all(hits == 1)
+        assert numba.get_num_threads() == threads
+        with pytest.raises(KeyError), team(tasks, pixels):
+            raise KeyError
+        assert numba.get_num_threads() == threads
+    finally:
+        numba.set_num_threads(before)
 
 
 def test_take_counts_up_from_the_counter():

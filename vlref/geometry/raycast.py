@@ -38,7 +38,7 @@ from numba import prange
 
 from ..camera import Camera
 from ..jit import njit
-from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from ..parallel import COUNTER, borrowed, take, task_counter, team, work
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
@@ -147,7 +147,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
     (:func:`vlref.parallel.borrowed`)."""
     h, w = depth.shape
     y = take(taken)
-    if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
+    if y >= h:  # before any allocation: a worker may find no row left
         return
     geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
         (geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id))
@@ -183,11 +183,13 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
-    """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
-    :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
+def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows,
+                    workers):
+    """The G-buffer: each of ``workers`` workers (:func:`vlref.parallel.team`) casts the rows it takes
+    (``cast_rows``: :func:`_cast_rows` by address, :func:`vlref.parallel.work`), which borrows the arrays (module
+    docstring, "Performance")."""
     taken = task_counter()
-    for _ in prange(WORKERS):
+    for _ in prange(workers):
         cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 
 
@@ -208,14 +210,15 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
     args = kernel_args(geo, camera, buf)
-    _raycast_kernel(*args, work(_cast_rows, COUNTER, *args))
+    with team(h, h * w) as workers:
+        _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), workers)
     return buf
 
 
 def kernel_args(geo: GeoArrays, camera: Camera, buf: GBuffer) -> tuple:
-    """The ray-cast kernel's arguments but its work (``_raycast_kernel(*args, work(_cast_rows, COUNTER, *args))``
-    fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the rays, the far plane,
-    the stored buffers."""
+    """The ray-cast kernel's arguments but its work and workers (``_raycast_kernel(*args, work(_cast_rows, COUNTER,
+    *args), workers)`` fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the
+    rays, the far plane, the stored buffers."""
     return (geo, without_tree(geo), tree_spans(geo, buf.origin, buf.directions), buf.origin, buf.directions,
             np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth, buf.distance,
             buf.normal, buf.object_id)
