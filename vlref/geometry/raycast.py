@@ -30,13 +30,14 @@ zeroes each one), which is why only 44 bytes a pixel are written.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 from numba import prange
 
-from ..camera import Camera
+from ..camera import Camera, cross
 from ..jit import njit
 from ..parallel import COUNTER, borrowed, take, task_counter, team, work
 from ..row_blocks import in_row_blocks
@@ -114,11 +115,11 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
     if geo.pnode_min.shape[0] == 0 or h == 0 or w == 0:
         return np.zeros((h, 2), dtype=np.int64)
     lo, hi = geo.pnode_min[0], geo.pnode_max[0]
-    corners = np.stack(np.meshgrid(*zip(lo, hi), indexing="ij"), axis=-1).reshape(8, 3) - origin
+    corners = np.array(list(itertools.product(*zip(lo.tolist(), hi.tolist())))) - origin
     margin = 1e-9 * (float(np.abs(corners).max()) + 1.0)
 
     def may_cross(first, last):
-        normal = np.cross(first, last)
+        normal = cross(first, last)
         norm = np.linalg.norm(normal, axis=-1)
         side = corners @ (normal / np.maximum(norm, 1e-300)[:, None]).T
         apart = (side > margin).all(axis=0) | (side < -margin).all(axis=0)
