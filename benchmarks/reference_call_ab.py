@@ -1,15 +1,13 @@
-"""The whole ``render_reference`` call of two trees on one machine, and the team size of the frame's small kernels
-(BENCHMARKS.md, "The reference's fixed costs: a team sized to the work, the frame without NumPy's generic paths").
+"""The whole ``render_reference`` call of two trees on one machine (BENCHMARKS.md, "The reference's fixed costs: one
+worker per thread, the frame without NumPy's generic paths").
 
 Run it once per tree, each in a fresh process with that tree first on ``PYTHONPATH``, alternated (main, tree, tree,
 main) so load drifts hit both:
 
-    PYTHONPATH=TREE python benchmarks/reference_call_ab.py --tag tree --vlref 7e-1/1/3,1/1/3 \\
-        --min-thread-pixels 1024,1,512,4096,1000000000 [--hashes]
+    PYTHONPATH=TREE python benchmarks/reference_call_ab.py --tag tree --vlref 7e-1/1/3,1/1/3 [--hashes]
 
-The bench scene of ``mitsuba_ratio.py`` at 80x45. Per setting ``rel_tol/shadow_samples/rule`` and per value of
-:data:`vlref.parallel.MIN_THREAD_PIXELS` (where the tree has it; the values alternated over ``--rounds`` rounds of
-``--calls`` calls each, after one warm-up call): the whole call's wall time, its part before the quadrature
+The bench scene of ``mitsuba_ratio.py`` at 80x45. Per setting ``rel_tol/shadow_samples/rule``, after one warm-up
+call, ``--rounds`` rounds of ``--calls`` calls each: the whole call's wall time, its part before the quadrature
 (``stats["frame_seconds"]``), the same call given :func:`~vlref.reference.prepare_reference`'s frame, and
 :func:`vlref.render.prepare_frame` alone (medians over every round); the sha256 of the result's images (inscatter,
 transmittance, final, error, shadow boundaries). ``--hashes``: also the sha256 of ``prepare_frame``'s camera, rays,
@@ -31,7 +29,6 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from mitsuba_ratio import bench_scene, parse_settings  # noqa: E402  (this folder, whichever tree is on the path)
 
-import vlref.parallel as parallel  # noqa: E402
 from vlref.reference import prepare_reference, render_reference  # noqa: E402
 from vlref.render import prepare_frame  # noqa: E402
 from vlref.scene import bundled_scenes, load_scene  # noqa: E402
@@ -54,40 +51,31 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--tag", default="")
     ap.add_argument("--vlref", default="7e-1/1/3", help="settings rel_tol/shadow_samples/rule, comma-separated")
-    ap.add_argument("--min-thread-pixels", default="", help="values of vlref.parallel.MIN_THREAD_PIXELS to alternate")
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--calls", type=int, default=20)
     ap.add_argument("--hashes", action="store_true")
     args = ap.parse_args()
     scene = bench_scene(80, 45)
-    values = [int(v) for v in args.min_thread_pixels.split(",") if v] if hasattr(parallel, "MIN_THREAD_PIXELS") else []
-    configs = values or [None]
     for rel_tol, samples, rule in parse_settings(args.vlref):
         kw = {"rel_tol": rel_tol, "shadow_samples": samples, "rule": rule}
-        times = {c: {"whole": [], "frame": [], "reused": [], "prepare_frame": []} for c in configs}
-        shas = {}
+        times = {"whole": [], "frame": [], "reused": [], "prepare_frame": []}
         render_reference(scene, **kw)
         for _ in range(args.rounds):
-            for c in configs:
-                if c is not None:
-                    parallel.MIN_THREAD_PIXELS = c
-                t = times[c]
-                for _ in range(args.calls):
-                    start = time.perf_counter()
-                    result = render_reference(scene, **kw)
-                    t["whole"].append(time.perf_counter() - start)
-                    t["frame"].append(result.stats["frame_seconds"])
-                prepared = prepare_reference(scene)
-                for _ in range(args.calls):
-                    t["reused"].append(timed(lambda: render_reference(prepared, **kw)))
-                    t["prepare_frame"].append(timed(lambda: prepare_frame(scene)))
-                shas[c] = sha(result.inscatter, result.transmittance, result.final, result.error,
-                              result.stats["shadow_boundaries"])
-        for c in configs:
-            row = {"tag": args.tag, "setting": f"{rel_tol:g}/{samples}/{rule}", "threads": numba.get_num_threads(),
-                   "min_thread_pixels": c, "calls": len(times[c]["whole"]), "sha": shas[c]}
-            row.update({f"{k}_median_ms": 1e3 * float(np.median(v)) for k, v in times[c].items()})
-            print(json.dumps(row), flush=True)
+            for _ in range(args.calls):
+                start = time.perf_counter()
+                result = render_reference(scene, **kw)
+                times["whole"].append(time.perf_counter() - start)
+                times["frame"].append(result.stats["frame_seconds"])
+            prepared = prepare_reference(scene)
+            for _ in range(args.calls):
+                times["reused"].append(timed(lambda: render_reference(prepared, **kw)))
+                times["prepare_frame"].append(timed(lambda: prepare_frame(scene)))
+        row = {"tag": args.tag, "setting": f"{rel_tol:g}/{samples}/{rule}", "threads": numba.get_num_threads(),
+               "omp_wait_policy": os.environ.get("OMP_WAIT_POLICY"), "calls": len(times["whole"]),
+               "sha": sha(result.inscatter, result.transmittance, result.final, result.error,
+                          result.stats["shadow_boundaries"])}
+        row.update({f"{k}_median_ms": 1e3 * float(np.median(v)) for k, v in times.items()})
+        print(json.dumps(row), flush=True)
     if args.hashes:
         frames = {}
         for name in sorted(bundled_scenes()):

@@ -1,6 +1,7 @@
-# The reference's whole call against main, the team sizes of the frame's kernels, the frame's split and Mitsuba 3 in one
-# device call (BENCHMARKS.md, "The reference's fixed costs: a team sized to the work, the frame without NumPy's generic
-# paths"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN and the Mitsuba bundle in
+# The reference's whole call against main (also under OMP_WAIT_POLICY=passive, a probe), the frame's split and Mitsuba 3
+# in one device call (BENCHMARKS.md, "The reference's fixed costs: one worker per thread, the frame without NumPy's
+# generic paths"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN and the Mitsuba
+# bundle in
 # .dev/mitsuba-bundle; results under $OUT:
 #     bash .dev/TREE/benchmarks/reference_call_device.sh TREE MAIN
 set -u
@@ -13,13 +14,16 @@ python3 .dev/mitsuba-bundle/unpack.py .dev/mitsuba-bundle /tmp/mits > /dev/null 
 ab() {  # tree dir, tag, Numba cache, arguments
   (cd $1 && NUMBA_CACHE_DIR=$3 PYTHONPATH=$1 python3 $AB --tag $2 "${@:4}")
 }
-V=7e-1/1/3,1/1/3 P=1024,1,256,512,2048,4096
+V=7e-1/1/3,1/1/3
 ab $M main /tmp/nc_main --vlref $V --rounds 1 --calls 3 --hashes > $OUT/warm_main.txt 2>&1 &
 ab $T tree /tmp/nc_tree --vlref $V --rounds 1 --calls 3 --hashes > $OUT/warm_tree.txt 2>&1 &
 wait
 echo "cold compiles in parallel, Mitsuba unpacked: $(( $(date +%s) - start )) s" >> $OUT/machine.txt
 for x in "$M main /tmp/nc_main" "$T tree /tmp/nc_tree" "$T tree /tmp/nc_tree" "$M main /tmp/nc_main"; do
-  ab $x --vlref $V --min-thread-pixels $P --rounds 3 --calls 20 >> $OUT/ab.txt 2>&1
+  ab $x --vlref $V --rounds 3 --calls 20 >> $OUT/ab.txt 2>&1
+done
+for x in "$T tree /tmp/nc_tree" "$M main /tmp/nc_main" "$M main /tmp/nc_main" "$T tree /tmp/nc_tree"; do
+  OMP_WAIT_POLICY=passive ab $x --vlref $V --rounds 3 --calls 20 >> $OUT/ab.txt 2>&1
 done
 echo "A/B: $(( $(date +%s) - start )) s" >> $OUT/machine.txt
 for x in "$M /tmp/nc_main 16" "$T /tmp/nc_tree 16" "$T /tmp/nc_tree 1"; do

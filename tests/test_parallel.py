@@ -12,7 +12,7 @@ from vlref.geometry.raycast import _raycast_kernel
 from vlref.lights.shading import _shade
 from vlref.lights.shadow_cast import _cast_face
 from vlref.march.physical import _march_kernel
-from vlref.parallel import COUNTER, MIN_THREAD_PIXELS, WORKERS, borrowed, take, task_counter, team, work
+from vlref.parallel import COUNTER, WORKERS, borrowed, take, task_counter, work, workers
 
 
 @njit(parallel=True)
@@ -81,26 +81,18 @@ def _take_all_workers(n_tasks, hits, workers):
             hits[task] += 1
 
 
-@pytest.mark.parametrize("tasks, pixels, size", [(0, None, 1), (1, None, 1), (5, None, 2), (5, 0, 1),
-                                                 (5, MIN_THREAD_PIXELS, 1), (5, 2 * MIN_THREAD_PIXELS - 1, 1),
-                                                 (5, 2 * MIN_THREAD_PIXELS, 2), (1, 10 * MIN_THREAD_PIXELS, 1)])
-def test_a_team_has_a_thread_per_task_and_per_min_thread_pixels_and_takes_every_task(tasks, pixels, size):
-    """Two threads (where Numba has them): ``team`` lowers Numba's thread count to its size inside the block (one
-    thread per task, per MIN_THREAD_PIXELS pixels, at least one) and restores it after, an error included; its
-    workers take every task."""
+@pytest.mark.parametrize("tasks, size", [(0, 1), (1, 1), (2, 2), (5, 2)])
+def test_workers_are_one_per_thread_no_more_than_the_tasks_and_take_every_task(tasks, size):
+    """Two threads (where Numba has them): ``workers`` is the kernel's ``prange`` count, one per thread and no more
+    than the tasks (at least one); Numba's thread count is left as it is, and the workers take every task."""
     threads = min(2, numba.config.NUMBA_NUM_THREADS)
     before = numba.get_num_threads()
     numba.set_num_threads(threads)
     try:
-        with team(tasks, pixels) as workers:
-            assert workers == min(size, threads) == numba.get_num_threads()
-            hits = np.zeros(7 * tasks, dtype=np.int64)
-            _take_all_workers(hits.size, hits, workers)
-            assert np.all(hits == 1)
-        assert numba.get_num_threads() == threads
-        with pytest.raises(KeyError), team(tasks, pixels):
-            raise KeyError
-        assert numba.get_num_threads() == threads
+        assert workers(tasks) == min(size, threads) and numba.get_num_threads() == threads
+        hits = np.zeros(7 * tasks, dtype=np.int64)
+        _take_all_workers(hits.size, hits, workers(tasks))
+        assert np.all(hits == 1)
     finally:
         numba.set_num_threads(before)
 

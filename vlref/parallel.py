@@ -12,14 +12,14 @@ machine's threads (a kernel that asks Numba for its thread count cannot be cache
 iteration takes tasks until none is left, and its other iterations find none. Which thread marches which
 task changes no result: tasks are independent and each writes only its own pixels.
 
-**A team sized to the work** (:func:`team`). An iteration that finds no task still calls the work function
+**One iteration per thread** (:func:`workers`). An iteration that finds no task still calls the work function
 with all its arguments (a ray cast's ~50 arrays: their structs copied, their reference counts added and
 dropped): the 1024 iterations of :data:`WORKERS` cost a ray cast at 80x45 ~0.3 ms on one thread, more than its
 rays. The kernels of small images (the ray cast, the scene colour, the quadrature reference) take their
-iteration count as an argument instead: one per thread. And every ``prange`` launches all of Numba's threads
-(each gets a block of the iterations, empty or not), whose waking and spinning cost more than a few hundred
-pixels of work: :func:`team` lowers Numba's thread count for the launch to one thread per
-:data:`MIN_THREAD_PIXELS` pixels (or per task, where tasks are fewer).
+iteration count as an argument instead, :func:`workers`: one per thread, no more than the tasks. Numba's thread
+count is left as it is: lowering it for a small launch (``numba.set_num_threads``) made the OpenMP runtime resize
+its team before the launch and again before the next, and measured slower on the device than every thread
+(BENCHMARKS.md "The reference's fixed costs").
 
 **Arrays without reference counts** (:func:`borrowed`). Numba counts references to every array passed to
 a compiled function, with an atomic add on a counter stored beside the array's data. When 16 threads
@@ -46,9 +46,6 @@ is printed, not propagated (the kernels check their arguments before the ``prang
 
 from __future__ import annotations
 
-import contextlib
-from typing import Iterator
-
 import numba
 import numpy as np
 from numba.core import cgutils, types
@@ -64,13 +61,9 @@ try:  # Numba's own typing cache key: what its dispatcher looks up a value's typ
 except ImportError:  # a Numba without it: the key is the type itself
     compute_fingerprint = None
 
-__all__ = ["WORKERS", "MIN_THREAD_PIXELS", "COUNTER", "task_counter", "take", "team", "borrowed", "Work",
-           "work"]
+__all__ = ["WORKERS", "COUNTER", "task_counter", "take", "workers", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
-MIN_THREAD_PIXELS = 1024
-"""The fewest pixels of a cheap kernel (a ray cast, a scene colour: ~0.1 µs a pixel) worth a thread of its own
-(:func:`team`)."""
 COUNTER = types.Array(types.int64, 1, "C")
 """The Numba type of the task counter of :func:`take` (:func:`task_counter`), for :func:`work`."""
 
@@ -186,21 +179,8 @@ def work(function, *args) -> Work:
     return _WORK[key]
 
 
-@contextlib.contextmanager
-def team(tasks: int, pixels: int | None = None) -> Iterator[int]:
-    """Numba's thread count lowered, for a kernel launched in the block, to at most one thread per task and (where
-    ``pixels`` is given: a cheap kernel) per :data:`MIN_THREAD_PIXELS` pixels, at least one; yields that count, the
-    kernel's ``prange`` iterations (one per thread: each takes tasks until none is left, module docstring). The
-    count is restored on leaving (Numba's thread count is the calling thread's own). Which thread takes which
-    task changes no result, so neither does the team's size."""
-    before = numba.get_num_threads()
-    threads = min(before, tasks) if pixels is None else min(before, tasks, pixels // MIN_THREAD_PIXELS)
-    threads = max(1, threads)
-    if threads == before:
-        yield threads
-        return
-    numba.set_num_threads(threads)
-    try:
-        yield threads
-    finally:
-        numba.set_num_threads(before)
+
+def workers(tasks: int) -> int:
+    """The ``prange`` iterations of a kernel whose threads take ``tasks`` tasks (module docstring): one per thread
+    of Numba's thread count, no more than the tasks, at least one. Which thread takes which task changes no result."""
+    return max(1, min(numba.get_num_threads(), int(tasks)))

@@ -39,7 +39,7 @@ from numba import prange
 
 from ..camera import Camera, cross
 from ..jit import njit
-from ..parallel import COUNTER, borrowed, take, task_counter, team, work
+from ..parallel import COUNTER, borrowed, take, task_counter, work, workers
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
@@ -186,7 +186,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 @njit(cache=True, fastmath=False, parallel=True)
 def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows,
                     workers):
-    """The G-buffer: each of ``workers`` workers (:func:`vlref.parallel.team`) casts the rows it takes
+    """The G-buffer: each of ``workers`` workers (one per thread, :func:`vlref.parallel.workers`) casts the rows it takes
     (``cast_rows``: :func:`_cast_rows` by address, :func:`vlref.parallel.work`), which borrows the arrays (module
     docstring, "Performance")."""
     taken = task_counter()
@@ -211,8 +211,7 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
     args = kernel_args(geo, camera, buf)
-    with team(h, h * w) as workers:
-        _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), workers)
+    _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), workers(h))
     return buf
 
 
