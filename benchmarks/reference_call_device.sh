@@ -1,8 +1,7 @@
 # The reference's whole call against main (also under OMP_WAIT_POLICY=passive, a probe), the frame's split and Mitsuba 3
 # in one device call (BENCHMARKS.md, "The reference's fixed costs: one worker per thread, the frame without NumPy's
 # generic paths"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN and the Mitsuba
-# bundle in
-# .dev/mitsuba-bundle; results under $OUT:
+# bundle in .dev/mitsuba-bundle; results under $OUT:
 #     bash .dev/TREE/benchmarks/reference_call_device.sh TREE MAIN
 set -u
 T=$PWD/.dev/$1 M=$PWD/.dev/$2 OUT=${OUT:-/tmp/out} AB=$PWD/.dev/$1/benchmarks/reference_call_ab.py
