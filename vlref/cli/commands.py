@@ -21,7 +21,6 @@ import sys
 import threading
 
 from .. import __version__
-from ..allocator import keep_freed_memory
 from ..processes import declare_own_kernels_only, not_importable
 from ..work_items import ItemsFailed
 from ..errors import InputError
@@ -67,14 +66,11 @@ def program_command(name: str):
     (NumPy's, Numba's, vlref's: ~130 000 objects, none of them garbage) are imported, instead of its repeated
     collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
     frozen out of its sight (:func:`gc.freeze`, see :func:`main`). For a command of :data:`OWN_KERNELS_ONLY` it
-    declares the process one that runs vlref's kernels alone (:func:`vlref.processes.declare_own_kernels_only`),
-    has glibc's ``malloc`` keep freed memory for reuse in it (:func:`vlref.allocator.keep_freed_memory`: the process
-    ends with its one command) and imports Numba without PyYAML where Numba has no file to read with it
-    (:func:`_numba_without_yaml`)."""
+    declares the process one that runs vlref's kernels alone (:func:`vlref.processes.declare_own_kernels_only`)
+    and imports Numba without PyYAML where Numba has no file to read with it (:func:`_numba_without_yaml`)."""
     own = name in OWN_KERNELS_ONLY
     if own:
         declare_own_kernels_only()
-        keep_freed_memory()
     enabled = gc.isenabled()
     gc.disable()
     try:
