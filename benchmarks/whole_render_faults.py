@@ -1,5 +1,5 @@
 """Page faults and the exit of the whole ``vlref render`` of (b) at 1920x1080x64, two trees alternated on one machine
-(BENCHMARKS.md, "The render program keeps freed memory"): run after ``whole_render_ab.py`` with the same
+(BENCHMARKS.md, "Numba's initialisation deferred to the first compile"): run after ``whole_render_ab.py`` with the same
 ``CACHE_ROOT``, whose caches it uses.
 
     python3 benchmarks/whole_render_faults.py OUT_DIR ROUNDS A_TREE B_TREE [CACHE_ROOT]

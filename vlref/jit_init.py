@@ -45,8 +45,10 @@ lowering registrations and the other implementation modules serve only the compi
 ``refresh`` is made a no-op for the loads (``Cache.load_overload`` calls it before every load) and a listener of
 Numba's ``numba:compile`` event (its public event API: the dispatcher triggers it after a cache miss, before it
 compiles) puts the target's own ``refresh`` back and runs it, without cffi and the extension scan as above, before
-the first kernel that the process compiles: a cold cache compiles as it always does. Dev box: Numba's
-initialisation and the BVH build's load 0.13-0.14 s -> 0.07 s.
+the first kernel that the process compiles: a cold cache compiles as it always does. Dev box: the initialisation
+0.11-0.15 s -> 0.05-0.06 s; device, the whole render's geometry stage (the initialisation and the BVH build) 0.20 ->
+0.07 s, its ray cast 0.07 -> 0.12 s (not explained; BENCHMARKS.md "Numba's initialisation deferred to the first
+compile").
 """
 
 from __future__ import annotations
