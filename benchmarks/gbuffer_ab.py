@@ -19,6 +19,7 @@ import sys
 
 CHILD = """
 import hashlib, inspect, json
+import numba
 import numpy as np
 from vlref.bench.config import bench_scene, median_time as median
 from vlref.bench.renders import _whole
@@ -57,6 +58,8 @@ if "cast_rows" in inspect.signature(_raycast_kernel.py_func).parameters:  # the 
     from vlref.geometry.raycast import _cast_rows
     from vlref.parallel import COUNTER, work
     kernel_args += (work(_cast_rows, COUNTER, *kernel_args),)
+if "workers" in inspect.signature(_raycast_kernel.py_func).parameters:  # one prange iteration per thread
+    kernel_args += (numba.get_num_threads(),)
 kernel = median(lambda: _raycast_kernel(*kernel_args), 5)
 from numpy._core.multiarray import _set_madvise_hugepage
 _set_madvise_hugepage(False)

@@ -113,7 +113,7 @@ class Probe:
     def kernel(self):
         args = kernel_args(self.geometry.arrays, self.camera, raycast(self.scene, self.camera, self.geometry))
         cast = work(_cast_rows, COUNTER, *args)
-        return lambda: _raycast_kernel(*args, cast)
+        return lambda: _raycast_kernel(*args, cast, numba.get_num_threads())
 
     def __call__(self, where: str) -> None:
         row = {"label": self.label, "before": where, "numba_threads": numba.get_num_threads(), "idle": idle()}

@@ -13,6 +13,7 @@ inlined query is not the sum of its parts. The attribution in BENCHMARKS.md come
 import sys
 import time
 
+import numba
 import numpy as np
 from numba import njit, prange
 
@@ -66,7 +67,7 @@ def main(width=480, height=270, res=512):
     args = kernel_args(geo, camera, buf)
     rows = {
         "raycast (buffers allocated)": lambda: raycast(scene, camera, geometry),
-        "raycast kernel (buffers reused)": lambda: _raycast_kernel(*args, work(_cast_rows, COUNTER, *args)),
+        "raycast kernel (buffers reused)": lambda: _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), numba.get_num_threads()),
         "closest_hits only": lambda: _hits_only(geo, origin, dirs, tmax),
     }
     print(f"bench scene (b) {width}x{height}, {n} rays; ns per ray: wall / CPU")

@@ -5,7 +5,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vlref.camera import (Camera, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
+from vlref.camera import (Camera, cross, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
                           unity_linear_eye_depth, zbuffer_params)
 from vlref.row_blocks import MAX_BLOCK_ROWS
 
@@ -33,6 +33,17 @@ def test_look_rotation_is_a_left_handed_orthonormal_frame(forward):
     np.testing.assert_allclose(np.linalg.det(r), 1.0, atol=1e-12)
     np.testing.assert_allclose(r[:, 2], np.array(forward) / np.linalg.norm(forward), atol=1e-12)
     assert r[1, 1] >= -1e-12 or abs(forward[1]) > 0.99 * np.linalg.norm(forward)  # up stays up
+
+
+
+def test_cross_has_the_bits_of_numpys_cross():
+    rng = np.random.default_rng(11)
+    for shape in ((3,), (1, 3), (45, 3), (4, 5, 3)):
+        for _ in range(50):
+            a = rng.normal(size=shape) * 10.0 ** rng.uniform(-8, 8)
+            b = rng.normal(size=shape) * 10.0 ** rng.uniform(-8, 8)
+            assert cross(a, b).tobytes() == np.cross(a, b).tobytes(), shape
+    assert cross((1, 0, 0), (0, 1, 0)).tolist() == [0.0, 0.0, 1.0]  # tuples of ints, like NumPy's
 
 
 def test_view_matrix_puts_the_camera_at_origin_looking_down_plus_z():

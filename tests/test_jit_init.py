@@ -99,9 +99,12 @@ import tempfile
 from vlref.scene import load_scene
 with tempfile.TemporaryDirectory() as folder:
     render_to_folder(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]), folder + "/out")
-from numba.core.typing import cffi_utils
+# Numba's cffi module is imported by the initialisation's registrations (at once, or at the first compile of a
+# process that loaded its kernels from the cache only): its support where it was imported, none where it was not
+cffi_utils = sys.modules.get("numba.core.typing.cffi_utils")
 state = {"cffi imported": "cffi" in sys.modules, "pycparser imported": "pycparser" in sys.modules,
-         "numba cffi support": cffi_utils.SUPPORTED, "extensions loaded": numba.core.entrypoints._already_initialized}
+         "numba cffi support": cffi_utils is not None and cffi_utils.SUPPORTED,
+         "extensions loaded": numba.core.entrypoints._already_initialized}
 import cffi  # a complete import afterwards, whatever Numba's support
 state["cffi works"] = cffi.FFI().sizeof("int") == 4
 print(json.dumps(state))
@@ -175,3 +178,61 @@ def test_a_compile_ahead_process_initialises_numba_as_the_render_programs_own_pr
     stage compiles, without scipy.linalg, cffi and the extension scan (it starts behind the main process)."""
     assert _state(AHEAD_PROCESS) == {"stages": ["march"], "numba initialised": True, "cffi imported": False,
                                      "scipy.linalg": False, "numba cffi support": False, "extensions loaded": True}
+
+
+LOADING_ONLY = r"""
+import hashlib, json, sys, tempfile
+from pathlib import Path
+from vlref.cli.commands import program_command
+render_to_folder = program_command("render").render_to_folder
+from numba.core import event, registry
+from vlref.scene import load_scene
+
+
+class Compiles(event.Listener):
+    count = 0
+
+    def on_start(self, ev):
+        Compiles.count += 1
+
+    def on_end(self, ev):
+        pass
+
+
+event.register("numba:compile", Compiles())
+context = registry.cpu_target.target_context
+with tempfile.TemporaryDirectory() as folder:
+    render_to_folder(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]), folder + "/out")
+    final = hashlib.sha256(Path(folder, "out", "final.exr").read_bytes()).hexdigest()
+state = {"compiles": Compiles.count, "deferred": "refresh" in vars(context), "final": final,
+         "registries installed": len(context._registries) + len(context.typing_context._registries),
+         "scipy.linalg": "scipy.linalg" in sys.modules}
+import numpy as np
+from numba import njit
+
+
+@njit(cache=False)
+def user_code(a, word):  # a compile in the same process afterwards: lowering registrations, strings, BLAS
+    return np.dot(a, a), len(word.upper())
+
+
+dot, n = user_code(np.arange(4.0), "abc")
+state.update({"user code": [float(dot), n], "deferred after": "refresh" in vars(context),
+              "registries installed after": len(context._registries) + len(context.typing_context._registries),
+              "cffi imported": "cffi" in sys.modules})
+print(json.dumps(state))
+"""
+
+
+def test_the_render_programs_process_loads_cached_kernels_without_the_registrations_until_a_compile():
+    first = _state(LOADING_ONLY)  # fills the cache where it is cold (then it compiled, the registrations installed)
+    warm = _state(LOADING_ONLY)
+    # from the cache: nothing compiled, the registrations (and their modules) left out, the same bytes
+    assert warm["compiles"] == 0 and warm["deferred"] is True and warm["registries installed"] == 0
+    assert warm["scipy.linalg"] is False  # Numba's BLAS check ran with the extension alone
+    assert warm["final"] == first["final"]
+    # a compile afterwards installs them first: it works, without cffi (module docstring)
+    for state in (first, warm):
+        assert state["user code"] == [14.0, 3]  # 0 + 1 + 4 + 9; len("ABC")
+        assert state["deferred after"] is False and state["registries installed after"] > 10
+        assert state["cffi imported"] is False

@@ -12,7 +12,7 @@ from vlref.geometry.raycast import _raycast_kernel
 from vlref.lights.shading import _shade
 from vlref.lights.shadow_cast import _cast_face
 from vlref.march.physical import _march_kernel
-from vlref.parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from vlref.parallel import COUNTER, WORKERS, borrowed, take, task_counter, work, workers
 
 
 @njit(parallel=True)
@@ -43,9 +43,9 @@ def test_every_task_is_taken_exactly_once(n_tasks, threads):
 
 
 @njit(parallel=True)
-def _take_all_counted(n_tasks, hits):
+def _take_all_counted(n_tasks, hits, workers):
     taken = task_counter()
-    for _ in prange(WORKERS):
+    for _ in prange(workers):
         while True:
             task = take(taken)
             if task >= n_tasks:
@@ -61,13 +61,29 @@ def test_a_task_counter_adds_no_parfor_to_a_kernel():
     """``np.zeros`` in a parallel kernel is a parfor (a gufunc) of its own; ``task_counter`` is a call: the kernel
     lowers its ``prange`` alone. vlref's kernels that take tasks make their counter with it."""
     hits = np.zeros(100, dtype=np.int64)
-    _take_all_counted(100, hits)
+    _take_all_counted(100, hits, WORKERS)
     _take_all(100, np.zeros(100, dtype=np.int64), np.zeros(100, dtype=np.int64))
     assert np.all(hits == 1) and task_counter()[0] == 0
     assert _parfors(_take_all_counted) == 1 and _parfors(_take_all) == 2
     for kernel in (_raycast_kernel, _shade, _cast_face, _march_kernel):
         names = kernel.py_func.__code__.co_names
         assert "task_counter" in names and "zeros" not in names, kernel
+
+
+@pytest.mark.parametrize("tasks, size", [(0, 1), (1, 1), (2, 2), (5, 2)])
+def test_workers_are_one_per_thread_no_more_than_the_tasks_and_take_every_task(tasks, size):
+    """Two threads (where Numba has them): ``workers`` is the kernel's ``prange`` count, one per thread and no more
+    than the tasks (at least one); Numba's thread count is left as it is, and the workers take every task."""
+    threads = min(2, numba.config.NUMBA_NUM_THREADS)
+    before = numba.get_num_threads()
+    numba.set_num_threads(threads)
+    try:
+        assert workers(tasks) == min(size, threads) and numba.get_num_threads() == threads
+        hits = np.zeros(7 * tasks, dtype=np.int64)
+        _take_all_counted(hits.size, hits, workers(tasks))
+        assert np.all(hits == 1)
+    finally:
+        numba.set_num_threads(before)
 
 
 def test_take_counts_up_from_the_counter():

@@ -110,7 +110,7 @@ def _compile_stage_process(stage: str, scene) -> None:
     scan; on the dev box its first compile began 0.31 s after its frame was set up, 0.12 + 0.04 s with it). That
     process starts behind the main one (its interpreter, its imports), and the main process waits for it."""
     declare_own_kernels_only()
-    initialise_numba()
+    initialise_numba(compiling=True)
     compile_stage(stage, scene)
 
 

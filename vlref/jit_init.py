@@ -34,17 +34,35 @@ cffi and registers no cffi types, exactly as where cffi is not installed; the en
 ``import cffi`` in the process is a complete import (only Numba's cffi support stays off in it). Dev box: the
 initialisation 0.19-0.22 → 0.16-0.18 s; device 0.139 → 0.112 s (BENCHMARKS.md
 "The program's own process: Numba without cffi and extensions, files synced beside the writing").
+
+**Loading only, until a compile** (that process, for the render's first kernels: ``initialise_numba()`` without
+``compiling``): a kernel loaded from Numba's cache needs little of the initialisation: the NRT (its C functions'
+symbols and the atomic functions it compiles), ``typeof`` of every argument (the first-class function values of
+:func:`vlref.parallel.work` are typed by ``numba.experimental.function_type``), and the Numba modules that the
+kernels' cached environments name, which their load imports (``numba.np.arrayobj``, which imports
+``numba.np.arraymath``: its BLAS check then runs here, with the module alone as above). The ~2 300 typing and
+lowering registrations and the other implementation modules serve only the compiler. So there the target's
+``refresh`` is made a no-op for the loads (``Cache.load_overload`` calls it before every load) and a listener of
+Numba's ``numba:compile`` event (its public event API: the dispatcher triggers it after a cache miss, before it
+compiles) puts the target's own ``refresh`` back and runs it, without cffi and the extension scan as above, before
+the first kernel that the process compiles: a cold cache compiles as it always does. Dev box: the initialisation
+0.11-0.15 s -> 0.05-0.06 s; device, the whole render's geometry stage (the initialisation and the BVH build) 0.20 ->
+0.07 s, its ray cast 0.07 -> 0.12 s (not explained; BENCHMARKS.md "Numba's initialisation deferred to the first
+compile").
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib
 import importlib.machinery
 import importlib.util
 import os
 import sys
+from typing import Iterator
 
-from numba.core import compiler_lock, entrypoints, registry
+from numba.core import compiler_lock, entrypoints, event, registry
+from numba.core.runtime import rtsys
 
 from .processes import not_importable, own_kernels_only
 
@@ -83,11 +101,63 @@ def _cython_blas_alone():
     return module
 
 
-def initialise_numba() -> None:
+@contextlib.contextmanager
+def _blas_alone() -> Iterator[None]:
+    """A block in which Numba's BLAS check finds ``scipy.linalg.cython_blas`` loaded on its own (module docstring),
+    where no precondition fails; the import system's entry is removed again after it."""
+    module = None
+    if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
+            and BLAS_MODULE not in sys.modules:
+        module = _cython_blas_alone()
+    if module is not None:
+        sys.modules[BLAS_MODULE] = module
+    try:
+        yield
+    finally:
+        if module is not None and sys.modules.get(BLAS_MODULE) is module:
+            del sys.modules[BLAS_MODULE]
+
+
+def _no_registrations_to_install() -> None:
+    """The target's ``refresh`` while this process loads kernels only (module docstring)."""
+
+
+class _RefreshAtFirstCompile(event.Listener):
+    """Numba's ``numba:compile`` listener of :func:`_initialise_for_loading`: at the first compile of the process,
+    the target's own ``refresh`` put back and run (without cffi and the extension scan), as the initialisation
+    would have run it; later compiles find it in place."""
+
+    def __init__(self, context):
+        self.context = context
+
+    def on_start(self, ev) -> None:
+        if vars(self.context).get("refresh") is _no_registrations_to_install:
+            del self.context.refresh
+            with _without_foreign_support():
+                self.context.refresh()
+
+    def on_end(self, ev) -> None:
+        pass
+
+
+def _initialise_for_loading(context) -> None:
+    """What loading vlref's kernels from the cache needs of Numba's initialisation, the rest deferred to the
+    process's first compile (module docstring)."""
+    with _blas_alone():
+        importlib.import_module("numba.np.arraymath")
+    rtsys.initialize(context)
+    importlib.import_module("numba.experimental.function_type")
+    context.refresh = _no_registrations_to_install
+    event.register("numba:compile", _RefreshAtFirstCompile(context))
+
+
+def initialise_numba(compiling: bool = False) -> None:
     """Initialise Numba's CPU target now (what the first compiled call would do), with its BLAS check served by
     ``scipy.linalg.cython_blas`` alone (module docstring). Idempotent. It holds Numba's compiler lock while it
     runs, as Numba's own loading of a cached kernel does, so a kernel loaded or compiled meanwhile on another
-    thread waits for it."""
+    thread waits for it. In a process that runs vlref's kernels alone, unless the caller is about to compile
+    (``compiling``: :mod:`vlref.ahead`'s processes), the part that serves only the compiler waits for the first
+    compile (module docstring, "Loading only")."""
     if _done[0]:
         return
     _done[0] = True
@@ -95,16 +165,8 @@ def initialise_numba() -> None:
     if cpu_target is None:  # a Numba without it: its first kernel initialises it
         return
     with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext(), _without_foreign_support():
-        module = None
-        if "numba.np.arraymath" not in sys.modules and "scipy.linalg" not in sys.modules \
-                and BLAS_MODULE not in sys.modules:
-            module = _cython_blas_alone()
-        if module is None:
-            cpu_target.target_context.refresh()
+        if own_kernels_only() and not compiling:
+            _initialise_for_loading(cpu_target.target_context)
             return
-        sys.modules[BLAS_MODULE] = module
-        try:
+        with _blas_alone():
             cpu_target.target_context.refresh()
-        finally:
-            if sys.modules.get(BLAS_MODULE) is module:
-                del sys.modules[BLAS_MODULE]

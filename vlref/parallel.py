@@ -12,6 +12,15 @@ machine's threads (a kernel that asks Numba for its thread count cannot be cache
 iteration takes tasks until none is left, and its other iterations find none. Which thread marches which
 task changes no result: tasks are independent and each writes only its own pixels.
 
+**One iteration per thread** (:func:`workers`). An iteration that finds no task still calls the work function
+with all its arguments (a ray cast's ~50 arrays: their structs copied, their reference counts added and
+dropped): the 1024 iterations of :data:`WORKERS` cost a ray cast at 80x45 ~0.3 ms on one thread, more than its
+rays. The kernels of small images (the ray cast, the scene colour, the quadrature reference) take their
+iteration count as an argument instead, :func:`workers`: one per thread, no more than the tasks. Numba's thread
+count is left as it is: lowering it for a small launch (``numba.set_num_threads``) made the OpenMP runtime resize
+its team before the launch and again before the next, and measured slower on the device than every thread
+(BENCHMARKS.md "The reference's fixed costs").
+
 **Arrays without reference counts** (:func:`borrowed`). Numba counts references to every array passed to
 a compiled function, with an atomic add on a counter stored beside the array's data. When 16 threads
 pass the same input arrays (the light, shadow and medium records) to small functions on every step,
@@ -52,7 +61,7 @@ try:  # Numba's own typing cache key: what its dispatcher looks up a value's typ
 except ImportError:  # a Numba without it: the key is the type itself
     compute_fingerprint = None
 
-__all__ = ["WORKERS", "COUNTER", "task_counter", "take", "borrowed", "Work", "work"]
+__all__ = ["WORKERS", "COUNTER", "task_counter", "take", "workers", "borrowed", "Work", "work"]
 
 WORKERS = 1024  # prange iterations of a kernel whose threads take tasks (module docstring)
 COUNTER = types.Array(types.int64, 1, "C")
@@ -168,3 +177,10 @@ def work(function, *args) -> Work:
         argtypes = tuple(a if isinstance(a, types.Type) else numba.typeof(a) for a in args)
         _WORK[key] = Work(function, signature(types.none, *argtypes))
     return _WORK[key]
+
+
+
+def workers(tasks: int) -> int:
+    """The ``prange`` iterations of a kernel whose threads take ``tasks`` tasks (module docstring): one per thread
+    of Numba's thread count, no more than the tasks, at least one. Which thread takes which task changes no result."""
+    return max(1, min(numba.get_num_threads(), int(tasks)))

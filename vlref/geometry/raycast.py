@@ -30,15 +30,16 @@ zeroes each one), which is why only 44 bytes a pixel are written.
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 from numba import prange
 
-from ..camera import Camera
+from ..camera import Camera, cross
 from ..jit import njit
-from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from ..parallel import COUNTER, borrowed, take, task_counter, work, workers
 from ..row_blocks import in_row_blocks
 from ..scene.model import Scene
 from .bvh import traversal_stack
@@ -114,11 +115,11 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
     if geo.pnode_min.shape[0] == 0 or h == 0 or w == 0:
         return np.zeros((h, 2), dtype=np.int64)
     lo, hi = geo.pnode_min[0], geo.pnode_max[0]
-    corners = np.stack(np.meshgrid(*zip(lo, hi), indexing="ij"), axis=-1).reshape(8, 3) - origin
+    corners = np.array(list(itertools.product(*zip(lo.tolist(), hi.tolist())))) - origin
     margin = 1e-9 * (float(np.abs(corners).max()) + 1.0)
 
     def may_cross(first, last):
-        normal = np.cross(first, last)
+        normal = cross(first, last)
         norm = np.linalg.norm(normal, axis=-1)
         side = corners @ (normal / np.maximum(norm, 1e-300)[:, None]).T
         apart = (side > margin).all(axis=0) | (side < -margin).all(axis=0)
@@ -147,7 +148,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
     (:func:`vlref.parallel.borrowed`)."""
     h, w = depth.shape
     y = take(taken)
-    if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
+    if y >= h:  # before any allocation: a worker may find no row left
         return
     geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
         (geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id))
@@ -183,11 +184,13 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows):
-    """The G-buffer: every worker casts the rows it takes (``cast_rows``: :func:`_cast_rows` by address,
-    :func:`vlref.parallel.work`), which borrows the arrays (module docstring, "Performance")."""
+def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows,
+                    workers):
+    """The G-buffer: each of ``workers`` workers (one per thread, :func:`vlref.parallel.workers`) casts the rows it takes
+    (``cast_rows``: :func:`_cast_rows` by address, :func:`vlref.parallel.work`), which borrows the arrays (module
+    docstring, "Performance")."""
     taken = task_counter()
-    for _ in prange(WORKERS):
+    for _ in prange(workers):
         cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 
 
@@ -208,14 +211,14 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
     args = kernel_args(geo, camera, buf)
-    _raycast_kernel(*args, work(_cast_rows, COUNTER, *args))
+    _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), workers(h))
     return buf
 
 
 def kernel_args(geo: GeoArrays, camera: Camera, buf: GBuffer) -> tuple:
-    """The ray-cast kernel's arguments but its work (``_raycast_kernel(*args, work(_cast_rows, COUNTER, *args))``
-    fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the rays, the far plane,
-    the stored buffers."""
+    """The ray-cast kernel's arguments but its work and workers (``_raycast_kernel(*args, work(_cast_rows, COUNTER,
+    *args), workers)`` fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the
+    rays, the far plane, the stored buffers."""
     return (geo, without_tree(geo), tree_spans(geo, buf.origin, buf.directions), buf.origin, buf.directions,
             np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth, buf.distance,
             buf.normal, buf.object_id)

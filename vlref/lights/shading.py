@@ -32,7 +32,7 @@ from numba import prange
 from ..geometry import inline_shadow_transmittance, traversal_stack
 from ..jit import njit
 from ..numeric import cast
-from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from ..parallel import COUNTER, borrowed, take, task_counter, work, workers
 from .attenuation import distance_attenuation
 from .cone import cone_falloff
 from .cookies import directional_cookie_uv, sample_texture, spot_cookie_uv
@@ -120,7 +120,7 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
     (:func:`vlref.parallel.borrowed`: every shadow ray passes the geometry on)."""
     h, w = object_id.shape
     y = take(taken)
-    if y >= h:  # before any allocation: most of the WORKERS iterations find no row left
+    if y >= h:  # before any allocation: a worker may find no row left
         return
     geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky, out = (
         borrowed((geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient,
@@ -160,13 +160,13 @@ def _shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, ob
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _shade(geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission, ambient, sky,
-           out, shade_rows):
-    """The scene colour: every worker shades the rows it takes (``shade_rows``: :func:`_shade_rows` by address,
-    :func:`vlref.parallel.work`), which borrows the arrays (as the G-buffer's ray cast does,
+           out, shade_rows, workers):
+    """The scene colour: each of ``workers`` workers (one per thread, :func:`vlref.parallel.workers`) shades the rows it takes
+    (``shade_rows``: :func:`_shade_rows` by address, :func:`vlref.parallel.work`), which borrows the arrays (as the G-buffer's ray cast does,
     :mod:`vlref.geometry.raycast`: sky rows cost next to nothing, and 16 threads counting references to the same
     geometry arrays on every shadow ray contend for their counters)."""
     taken = task_counter()
-    for _ in prange(WORKERS):
+    for _ in prange(workers):
         shade_rows(taken, geo, lights, strength, origin, dirs, distance, normal, object_id, obj_albedo, obj_emission,
                    ambient, sky, out)
 
@@ -180,5 +180,5 @@ def scene_colour(gbuffer, scene, geometry, packed: PackedLights) -> np.ndarray:
     args = (geometry.arrays, lights, strength, gbuffer.origin, gbuffer.directions, gbuffer.distance, gbuffer.normal,
             gbuffer.object_id, gbuffer.object_albedo, gbuffer.object_emission,
             np.asarray(scene.render.ambient, dtype=np.float64), np.asarray(scene.render.sky_color, dtype=np.float64), out)
-    _shade(*args, work(_shade_rows, COUNTER, *args))
+    _shade(*args, work(_shade_rows, COUNTER, *args), workers(out.shape[0]))
     return out

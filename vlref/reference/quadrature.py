@@ -64,7 +64,7 @@ from ..medium import clip_to_bounds
 from ..render import Frame, prepare_frame
 from . import integrand as ig
 from .integrand import WG, WG1, WG3, WGK, WGK3, WGK7, XGK, XGK3, XGK7
-from ..parallel import WORKERS, borrowed, take, task_counter
+from ..parallel import borrowed, take, task_counter, workers
 from ..progress import bands_for, row_bands
 
 __all__ = ["ReferenceResult", "ReferenceFrame", "prepare_reference", "render_reference", "DEFAULT_ABS_TOL", "RULES"]
@@ -335,9 +335,9 @@ def _reference_tasks(taken, origin, dirs, t_end, ctx, rel_tol, abs_tol, shadow_s
 
 @njit(cache=True, fastmath=False, parallel=True)
 def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_extinction, bounded, rel_tol, abs_tol,
-                      shadow_samples, max_intervals, max_splits, rule):
-    """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over
-    :data:`~vlref.parallel.WORKERS` take tasks of pixels on demand (a pixel without shadow boundaries costs a few
+                      shadow_samples, max_intervals, max_splits, rule, workers):
+    """Every pixel of the band ``t_end`` (H, W): the threads of a ``prange`` over ``workers`` (one per thread,
+    :func:`vlref.parallel.workers`) take tasks of pixels on demand (a pixel without shadow boundaries costs a few
     dozen integrand evaluations, one crossing several shadows hundreds: ``prange``'s static split would
     leave threads idle), with the arrays borrowed (:func:`vlref.parallel.borrowed`: no reference counts
     on the records every shadow ray reads). Which thread solves a pixel changes no bit of it."""
@@ -350,7 +350,7 @@ def _reference_kernel(origin, dirs, t_end, geo, lights, shadows, medium, light_e
     shadow_edges = np.zeros((h, w), dtype=np.int64)
     taken = task_counter()
     no_stack = (np.empty(0, dtype=np.int64), np.empty(0))  # a thread that takes a pixel makes its own
-    for _ in prange(WORKERS):
+    for _ in prange(workers):
         o, d, te, g, lts, shd, med, res, st = borrowed((origin, dirs, t_end, geo, lights, shadows, medium,
                                                         (out, trans, err, used, ok, shadow_edges), no_stack))
         # assembled in the loop's body (Numba's parfor cannot pass nested tuples in)
@@ -461,7 +461,8 @@ def render_reference(scene, rel_tol: float = 1e-4, abs_tol: float = DEFAULT_ABS_
     work = t_end.size * (int(shadow_samples) + RAYS_BEYOND_GRID * int(rule) // 15) * max(1, len(frame.scene.lights))
     # ctx without its stack: each thread makes its own
     bands = [_reference_kernel(origin, dirs[b0:b1], t_end[b0:b1], *ctx[:-1], float(rel_tol), float(abs_tol),
-                               int(shadow_samples), int(max_intervals), max_splits, int(rule))
+                               int(shadow_samples), int(max_intervals), max_splits, int(rule),
+                               workers(-(-t_end[b0:b1].size // TASK_PIXELS)))
              for b0, b1 in row_bands(t_end.shape[0], bands_for(work, RAYS_PER_BAND * numba.get_num_threads()))]
     inscatter, trans, err, used, ok, edges = (np.concatenate(parts) if len(parts) > 1 else parts[0]
                                               for parts in zip(*bands))
