@@ -17,7 +17,8 @@ The URP passes run one Numba kernel (:func:`_blur_lines`) over tap tables built 
 the axis, the value texel and depth texel of each tap, in summation order. Vertical maps of the
 passes defined in Unity's uv are turned into array rows (:func:`~vlref.post.resolution.uv_row_map`).
 :func:`bilateral_pass` (thesis, VL), whose taps are symmetric integer offsets, runs
-:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels.
+:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels; :func:`blur_hv` of
+those passes runs both axes in one kernel (:func:`_bilateral_hv_lines`, the same bits as one pass after the other).
 """
 
 from __future__ import annotations
