@@ -31,13 +31,18 @@ VARIANTS = {
                   "    arrays_do_not_overlap()\n    prefer_wide_vectors()\n    W, C = v.shape[1], v.shape[2]\n"),
     "unfused": ("    if pass_fn in (thesis_blur_pass, vl_blur_pass):\n", "    if False:\n"),
     "hv_blocks2": ("get_num_threads(), *outs)", "2 * get_num_threads(), *outs)"),
+    "exp_ymm": ("    prefer_wide_vectors()\n    n = out.size\n", "    n = out.size\n"),
+    "reuse_out": ("        outs = (out, np.empty(v3.shape))\n",
+                  "        outs = globals().setdefault('_OUTS', {}).setdefault(v3.shape, (out, np.empty(v3.shape)))\n"),
     "frame": ("radius: int = 3, sigma", "radius: int = 0, sigma"),
     "no_exp": ("sigma: float = 1.5, depth_factor: float = 1.0", "sigma: float = 1.5, depth_factor: float = 0.0"),
 }
 """One replaced text each in this tree's blur.py (``tree``: none; ``main``: ``--main``'s file as it is). ``ymm``: a
 line's loops at the CPU's preferred width (256 bits on Intel's server cores); ``planes512``: the planes split with
 512-bit vectors too; ``unfused``: the two passes one after the other (two kernels), not in one; ``hv_blocks2``: the one
-kernel on two blocks per thread. Not the pass's bits, to split its time: ``frame`` (radius 0: the planes, the centre
+kernel on two blocks per thread; ``exp_ymm``: the Gaussian weights' loop at the CPU's preferred width;
+``reuse_out``: the one kernel writing into the same two arrays at every call (no fresh pages; results aliased,
+for timing only). Not the pass's bits, to split its time: ``frame`` (radius 0: the planes, the centre
 weight, the division and the output) and ``no_exp`` (depth weight 1: no ``exp``)."""
 
 
