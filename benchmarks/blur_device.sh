@@ -7,8 +7,7 @@
 # main) and variants.json (benchmarks/blur_variants.py, every variant in one process).
 set -u
 M=$(cd "$1" && pwd); T=$(cd "$2" && pwd); O=$(mkdir -p "$3" && cd "$3" && pwd)
-VARIANTS=${VARIANTS:-"tree main unfused hv_blocks2 ymm planes512 frame no_exp"}
-# (the second call: VARIANTS="ymm tree main exp_ymm reuse_out unfused no_exp")
+VARIANTS=${VARIANTS:-"tree main ymm planes512 blocks1 exp_ymm frame no_exp"}
 { lscpu; cat /sys/kernel/mm/transparent_hugepage/enabled; python3 -c "import numba, numpy, sys; print(sys.version, numpy.__version__, numba.__version__)"; } > "$O/cpu.txt" 2>&1
 SP=$(python3 -c "import numpy,os;print(os.path.dirname(os.path.dirname(numpy.__file__)))")
 STD=$(python3 -c "import sysconfig;print(sysconfig.get_paths()['stdlib'])")

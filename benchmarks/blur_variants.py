@@ -26,23 +26,18 @@ SOURCE = pathlib.Path(__file__).resolve().parents[1] / "vlref" / "post" / "blur.
 VARIANTS = {
     "tree": ("", ""),
     "main": ("", ""),  # the --main copy
-    "ymm": ("    prefer_wide_vectors()\n    C, W = acc.shape[0], T.shape[1]\n", "    C, W = acc.shape[0], T.shape[1]\n"),
+    "ymm": ("    prefer_wide_vectors()\n    H, W, C = v.shape\n", "    H, W, C = v.shape\n"),
     "planes512": ("    arrays_do_not_overlap()\n    W, C = v.shape[1], v.shape[2]\n",
                   "    arrays_do_not_overlap()\n    prefer_wide_vectors()\n    W, C = v.shape[1], v.shape[2]\n"),
-    "unfused": ("    if pass_fn in (thesis_blur_pass, vl_blur_pass):\n", "    if False:\n"),
-    "hv_blocks2": ("get_num_threads(), *outs)", "2 * get_num_threads(), *outs)"),
+    "blocks1": ("float(epsilon), 2 * get_num_threads(), out)", "float(epsilon), get_num_threads(), out)"),
     "exp_ymm": ("    prefer_wide_vectors()\n    n = out.size\n", "    n = out.size\n"),
-    "reuse_out": ("        outs = (out, np.empty(v3.shape))\n",
-                  "        outs = globals().setdefault('_OUTS', {}).setdefault(v3.shape, (out, np.empty(v3.shape)))\n"),
     "frame": ("radius: int = 3, sigma", "radius: int = 0, sigma"),
     "no_exp": ("sigma: float = 1.5, depth_factor: float = 1.0", "sigma: float = 1.5, depth_factor: float = 0.0"),
 }
-"""One replaced text each in this tree's blur.py (``tree``: none; ``main``: ``--main``'s file as it is). ``ymm``: a
-line's loops at the CPU's preferred width (256 bits on Intel's server cores); ``planes512``: the planes split with
-512-bit vectors too; ``unfused``: the two passes one after the other (two kernels), not in one; ``hv_blocks2``: the one
-kernel on two blocks per thread; ``exp_ymm``: the Gaussian weights' loop at the CPU's preferred width;
-``reuse_out``: the one kernel writing into the same two arrays at every call (no fresh pages; results aliased,
-for timing only). Not the pass's bits, to split its time: ``frame`` (radius 0: the planes, the centre
+"""One replaced text each in this tree's blur.py (``tree``: none; ``main``: ``--main``'s file as it is). ``ymm``: the
+block's loops at the CPU's preferred width (256 bits on Intel's server cores); ``planes512``: the planes split with
+512-bit vectors too; ``blocks1``: one block of rows per thread instead of two; ``exp_ymm``: the Gaussian weights' loop
+at the CPU's preferred width. Not the pass's bits, to split its time: ``frame`` (radius 0: the planes, the centre
 weight, the division and the output) and ``no_exp`` (depth weight 1: no ``exp``)."""
 
 

@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 
 from post_cases import depth_image, image, raw_depth, sizes
-from vlref.post.blur import (URP_GAUSS_WEIGHTS, _bilateral_hv_lines, _bilateral_lines, _gaussian_weight, _gaussian_weights, _weight_code, bilateral_pass, blur_hv,
+from vlref.post.blur import (URP_GAUSS_WEIGHTS, _bilateral_lines, _gaussian_weight, _gaussian_weights, _weight_code, bilateral_pass, blur_hv,
                              gaussian_weights, thesis_blur_pass, urp_article_blur_pass, urp_repo_blur_pass, vl_blur_pass)
 
 RTOL = 1e-12   # numpy's exp and math.exp may differ by an ulp; everything else is the same arithmetic
@@ -280,35 +280,11 @@ def test_no_bleeding_across_a_depth_edge(far):
 
 
 def test_blur_hv_runs_horizontal_then_vertical():
-    # the bilateral passes run both axes in one kernel: the bits of the two passes one after the other
     rng = np.random.default_rng(2)
     v, z = image(rng, 7, 8, 3), depth_image(rng, 7, 8)
     h, hv = blur_hv(thesis_blur_pass, v, z)
     assert (h == thesis_blur_pass(v, z, 1)).all()
     assert (hv == thesis_blur_pass(h, z, 0)).all()
-    v4 = image(rng, 7, 8, 4)
-    h, hv = blur_hv(vl_blur_pass, v4, z, resolution="full")
-    assert np.array_equal(h, vl_blur_pass(v4, z, 1, "full")) and np.array_equal(hv, vl_blur_pass(h, z, 0, "full"))
-    h, hv = blur_hv(urp_repo_blur_pass, v[..., 0], z)
-    assert np.array_equal(hv, urp_repo_blur_pass(urp_repo_blur_pass(v[..., 0], z, 1), z, 0))
-
-
-@pytest.mark.parametrize("C", [2, 3])
-def test_one_kernel_blur_hv_independent_of_the_blocks(C):
-    # each block redoes the horizontal rows its vertical taps reach beyond it (K above and below, fewer at the
-    # image's edges, blocks of one row for a radius wider than the block): any blocking gives both passes' bits
-    rng = np.random.default_rng(9 + C)
-    v, z = image(rng, 17, 300, C), depth_image(rng, 17, 300)
-    for K in (1, 3, 7):
-        g, code = gaussian_weights(K, 2.0), _weight_code("gaussian", 1.0, 1.0)
-        h = np.empty_like(v)
-        _bilateral_lines(v, z, 1, g, code, 1.0, 1.0, 1, h)
-        hv = np.empty_like(v)
-        _bilateral_lines(h, z, 0, g, code, 1.0, 1.0, 1, hv)
-        for blocks in (1, 2, 5, 17, 40):
-            outs = np.empty_like(v), np.empty_like(v)
-            _bilateral_hv_lines(v, z, g, code, 1.0, 1.0, blocks, *outs)
-            assert np.array_equal(outs[0], h) and np.array_equal(outs[1], hv), (K, blocks)
 
 
 def test_sky_depth_and_zero_factor_stay_finite():

@@ -17,8 +17,7 @@ The URP passes run one Numba kernel (:func:`_blur_lines`) over tap tables built 
 the axis, the value texel and depth texel of each tap, in summation order. Vertical maps of the
 passes defined in Unity's uv are turned into array rows (:func:`~vlref.post.resolution.uv_row_map`).
 :func:`bilateral_pass` (thesis, VL), whose taps are symmetric integer offsets, runs
-:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels; :func:`blur_hv` of
-those passes runs both axes in one kernel (:func:`_bilateral_hv_lines`, the same bits as one pass after the other).
+:func:`_bilateral_lines`: the same sums, each depth weight computed once for its pair of texels.
 """
 
 from __future__ import annotations
@@ -41,9 +40,6 @@ URP_GAUSS_WEIGHTS = (0.14446445, 0.13543542, 0.11153505, 0.08055309, 0.05087564,
 """``gauss_filter_weights[0..7]`` of the URP tutorial (SOURCES §2.5)."""
 
 DEPTH_WEIGHTS = ("gaussian", "inverse")
-
-BOTH_AXES = "hv"
-"""The ``axis`` of a bilateral pass that runs it along rows, then along columns of the result: ``(h, hv)``."""
 
 _GAUSSIAN, _UNIT, _INVERSE = 0, 1, 2   # depth-weight codes of the kernels (_UNIT: gaussian with factor 0)
 
@@ -324,43 +320,10 @@ def _finish_stretch(acc, wsum, n, out, r, c0):
 
 
 @njit(cache=True, fastmath=False)
-def _bilateral_line(g, K, axis, r, H, base, T, rows, acc, wsum, out, r_out):
-    """Line ``r`` of a pass along ``axis`` (:func:`_bilateral_lines`) into ``out[r_out]``: its depth weights in ``T``
-    from row ``base`` (:func:`_pair_tables`), its values as planes in ``rows`` (horizontal: ``rows[0]``, padded by
-    ``K``; vertical: the ring of source rows, row ``p`` in ``rows[p % (2K + 1)]``), summed in stretches of ``_CHUNK``
-    columns with the sums ``acc``, ``wsum``."""
-    prefer_wide_vectors()
-    C, W = acc.shape[0], T.shape[1]
-    for c0 in range(0, W, _CHUNK):
-        c1 = min(c0 + _CHUNK, W)
-        t = 0
-        while t < 2 * K + 1:
-            k, vrow, vshift, first, wrow, wshift = _tap(t, K, axis, r, H, base, c0, c1)
-            k2, vrow2, vshift2, first2, wrow2, wshift2 = _tap(min(t + 1, 2 * K), K, axis, r, H, base, c0, c1)
-            gk = g[abs(k)]
-            if C == 3 and t == 2 * K:  # the last tap (k = K, every column) ends the stretch
-                _close_rgb(gk, T, wrow, wshift, rows, vrow, vshift, c1, c0, t == 0, acc, wsum, out, r_out)
-                break
-            if t + 1 < 2 * K and C == 3 and first == c0 and first2 == c0:
-                _add_rgb_taps(gk, g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
-                              (vrow, vshift, vrow2, vshift2), first, c1, c0, t == 0, acc, wsum)
-                t += 2
-                continue
-            for c in range(c0, first):  # tap k < 0 of column c < -k is clamped to column 0: its pair (0, c)
-                w = gk * T[base + c, 0]
-                wsum[c - c0] += w
-                for ch in range(C):
-                    acc[ch, c - c0] += w * rows[0, ch, K + k + c]
-            _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, t == 0, acc, wsum)
-            t += 1
-        if C != 3:
-            _finish_stretch(acc, wsum, c1 - c0, out, r_out, c0)
-
-
-@njit(cache=True, fastmath=False)
 def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
     kernel small, which is most of its compile time)."""
+    prefer_wide_vectors()
     H, W, C = v.shape
     K = g.size - 1
     S = K + 1
@@ -381,35 +344,30 @@ def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
             _planar_row(v, r, K, rows[0])
         elif r + K <= H - 1:
             _planar_row(v, r + K, 0, rows[(r + K) % (2 * K + 1)])
-        _bilateral_line(g, K, axis, r, H, slot * S, T, rows, acc, wsum, out, r)
-
-
-@njit(cache=True, fastmath=False)
-def _bilateral_hv_block(v, z, g, code, factor, epsilon, r0, r1, h, hv):
-    """Rows ``r0 <= r < r1`` of :func:`_bilateral_hv_lines`: the horizontal pass of rows ``r0 - K .. r1 + K - 1``
-    (within the image) into ``h`` (the rows outside the block into a spare row: the neighbouring block writes them)
-    and, as each is done, into the ring of planes the vertical pass reads; vertical row ``q`` once the horizontal
-    row ``q + K`` is in the ring."""
-    H, W, C = v.shape
-    K = g.size - 1
-    S = K + 1
-    Tv, Th = np.empty(((K + 1) * S, W)), np.empty((S, W))
-    line, ring, spare = np.empty((1, C, W + 2 * K)), np.empty((2 * K + 1, C, W)), np.empty((1, W, C))
-    acc = np.zeros((C, _CHUNK))  # zeros: a fresh tap loads them and does not use them (_sums)
-    wsum = np.zeros(_CHUNK)
-    flags = np.empty(W // 8 + 1, np.uint64)
-    p = max(r0 - K, 0)
-    for q in range(max(r0 - K, 0), r1):
-        _pair_tables(z, q, 0, K, code, factor, epsilon, flags, Tv, (q % S) * S)
-        while p <= min(q + K, H - 1):
-            _pair_tables(z, p, 1, K, code, factor, epsilon, flags, Th, 0)
-            _planar_row(v, p, K, line[0])
-            dest, at = (h, p) if r0 <= p < r1 else (spare, 0)
-            _bilateral_line(g, K, 1, p, H, 0, Th, line, acc, wsum, dest, at)
-            _planar_row(dest, at, 0, ring[p % (2 * K + 1)])
-            p += 1
-        if q >= r0:
-            _bilateral_line(g, K, 0, q, H, (q % S) * S, Tv, ring, acc, wsum, hv, q)
+        for c0 in range(0, W, _CHUNK):
+            c1 = min(c0 + _CHUNK, W)
+            t = 0
+            while t < 2 * K + 1:
+                k, vrow, vshift, first, wrow, wshift = _tap(t, K, axis, r, H, slot * S, c0, c1)
+                k2, vrow2, vshift2, first2, wrow2, wshift2 = _tap(min(t + 1, 2 * K), K, axis, r, H, slot * S, c0, c1)
+                gk = g[abs(k)]
+                if C == 3 and t == 2 * K:  # the last tap (k = K, every column) ends the stretch
+                    _close_rgb(gk, T, wrow, wshift, rows, vrow, vshift, c1, c0, t == 0, acc, wsum, out, r)
+                    break
+                if t + 1 < 2 * K and C == 3 and first == c0 and first2 == c0:
+                    _add_rgb_taps(gk, g[abs(k2)], T, (wrow, wshift, wrow2, wshift2), rows,
+                                  (vrow, vshift, vrow2, vshift2), first, c1, c0, t == 0, acc, wsum)
+                    t += 2
+                    continue
+                for c in range(c0, first):  # tap k < 0 of column c < -k is clamped to column 0: its pair (0, c)
+                    w = gk * T[slot * S + c, 0]
+                    wsum[c - c0] += w
+                    for ch in range(C):
+                        acc[ch, c - c0] += w * rows[0, ch, K + k + c]
+                _add_tap(gk, T, wrow, wshift, rows, vrow, vshift, first, c1, c0, t == 0, acc, wsum)
+                t += 1
+            if C != 3:
+                _finish_stretch(acc, wsum, c1 - c0, out, r, c0)
 
 
 @njit(cache=True, fastmath=False, parallel=True)
@@ -439,20 +397,6 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     for b in prange(n_items):
         vb, zb, gb, ob = borrowed((v, z, g, out))
         _bilateral_block(vb, zb, axis, gb, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, ob)
-
-
-@njit(cache=True, fastmath=False, parallel=True)
-def _bilateral_hv_lines(v, z, g, code, factor, epsilon, blocks, h, hv):
-    """:func:`_bilateral_lines` along rows into ``h``, then along columns of ``h`` into ``hv``, in one kernel: each of
-    ``blocks`` blocks of rows runs both (:func:`_bilateral_hv_block`), the vertical pass reading the horizontal
-    rows from the block's ring of planes while they are in the cache, not from ``h``. A block computes the ``K``
-    horizontal rows above and below it again (the rows its vertical taps reach): the same rows, the same bits, so
-    ``h`` and ``hv`` are those of the two passes run one after the other, for any blocking."""
-    H = v.shape[0]
-    n_items = max(1, min(H, blocks))
-    for b in prange(n_items):
-        vb, zb, gb, hb, hvb = borrowed((v, z, g, h, hv))
-        _bilateral_hv_block(vb, zb, gb, code, factor, epsilon, b * H // n_items, (b + 1) * H // n_items, hb, hvb)
 
 
 def _line_buffers(v):
@@ -486,44 +430,35 @@ def _values(values) -> np.ndarray:
     return v
 
 
-def bilateral_pass(values, depth, axis: int | str, gauss, depth_factor: float = 1.0,
-                   depth_weight_kind: str = "gaussian", epsilon: float = 1e-3, keep_alpha: bool = False):
+def bilateral_pass(values, depth, axis: int, gauss, depth_factor: float = 1.0, depth_weight_kind: str = "gaussian",
+                   epsilon: float = 1e-3, keep_alpha: bool = False) -> np.ndarray:
     """One pass with taps at integer texel offsets ``k = -K..K`` (``K = len(gauss) - 1``), value and
     depth read at the same texel of the same resolution (thesis §4.2.6; SOURCES §1.9).
 
     Tap order (VL ``BilateralBlur``): the centre, then ``k = -K..-1``, then ``k = 1..K``; tap ``k``
     weighs ``gauss[|k|] * W(dz_k)``, the centre ``gauss[0] * W(0)`` (1 for ``"gaussian"``). ``keep_alpha``: the last
-    channel is the centre texel's, not blurred (VL's alpha carries the transmittance). ``axis = BOTH_AXES``: the pair
-    ``(h, hv)`` of :func:`blur_hv` (the pass along axis 1, then along axis 0 on its result), in one kernel
-    (:func:`_bilateral_hv_lines`, the same bits).
+    channel is the centre texel's, not blurred (VL's alpha carries the transmittance).
     """
-    check_choice("axis", axis, (0, 1, BOTH_AXES))
+    check_choice("axis", axis, (0, 1))
     v = _values(values)
-    z = np.ascontiguousarray(depth, dtype=np.float64)
+    z = np.asarray(depth, dtype=np.float64)
     if z.shape != v.shape[:2]:
         raise ValueError(f"depth: depth shape {z.shape} does not match values {v.shape[:2]}")
     if keep_alpha and v.ndim != 3:
         raise ValueError("values: keep_alpha needs an (H, W, C) buffer")
     code = _weight_code(depth_weight_kind, depth_factor, epsilon)
     v3, out = _line_buffers(v)
-    g, factor, epsilon = np.asarray(gauss, dtype=np.float64), float(depth_factor), float(epsilon)
-    if axis == BOTH_AXES:
-        outs = (out, np.empty(v3.shape))
-        _bilateral_hv_lines(v3, z, g, code, factor, epsilon, get_num_threads(), *outs)
-    else:
-        outs = (out,)
-        _bilateral_lines(v3, z, axis, g, code, factor, epsilon, 2 * get_num_threads(), out)
-    outs = tuple(o.reshape(v.shape) for o in outs)
-    for o in outs:
-        if keep_alpha:
-            o[..., -1] = v[..., -1]
-    return outs if axis == BOTH_AXES else outs[0]
+    _bilateral_lines(v3, np.ascontiguousarray(z), axis, np.asarray(gauss, dtype=np.float64), code, float(depth_factor),
+                     float(epsilon), 2 * get_num_threads(), out)
+    out = out.reshape(v.shape)
+    if keep_alpha:
+        out[..., -1] = v[..., -1]
+    return out
 
 
-def thesis_blur_pass(values, depth, axis: int | str, radius: int = 3, sigma: float = 1.5, depth_factor: float = 1.0,
-                     depth_weight_kind: str = "gaussian", epsilon: float = 1e-3):
-    """The thesis's 7-tap pass (source pixel and 3 each side) on linear eye depth (§4.2.6); ``axis`` as
-    :func:`bilateral_pass`'s.
+def thesis_blur_pass(values, depth, axis: int, radius: int = 3, sigma: float = 1.5, depth_factor: float = 1.0,
+                     depth_weight_kind: str = "gaussian", epsilon: float = 1e-3) -> np.ndarray:
+    """The thesis's 7-tap pass (source pixel and 3 each side) on linear eye depth (§4.2.6).
 
     The thesis gives neither sigma nor the depth factor [U]: the defaults are
     ``vlref.scene.technique_params.KillzoneParams`` (sigma 1.5 texels, ``exp(-(1.0 dz)^2)`` with
@@ -534,9 +469,9 @@ def thesis_blur_pass(values, depth, axis: int | str, radius: int = 3, sigma: flo
                           epsilon)
 
 
-def vl_blur_pass(values, depth, axis: int | str, resolution: str = "half", deviation: float = 1.5,
-                 depth_factor: float = 0.5, kernel_radius: int | None = None):
-    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (SOURCES §1.9); ``axis`` as :func:`bilateral_pass`'s.
+def vl_blur_pass(values, depth, axis: int, resolution: str = "half", deviation: float = 1.5,
+                 depth_factor: float = 0.5, kernel_radius: int | None = None) -> np.ndarray:
+    """VolumetricLights' pass on an RGBA buffer ``(H, W, 4)`` (SOURCES §1.9).
 
     Radius ``K`` = 7 / 5 / 6 for full / half / quarter (``kernel_radius`` overrides it), Gaussian
     ``sigma = K / deviation`` (``GAUSS_BLUR_DEVIATION 1.5``), depth weight
@@ -628,9 +563,6 @@ def urp_repo_blur_pass(fog, depth_full, axis: int, taps: int = 5, falloff: float
 
 
 def blur_hv(pass_fn, values, depth, **params) -> tuple[np.ndarray, np.ndarray]:
-    """``(h, hv)``: ``pass_fn`` along axis 1, then along axis 0 on its output (both buffers returned). The bilateral
-    passes (:func:`thesis_blur_pass`, :func:`vl_blur_pass`) run both in one kernel (``axis = BOTH_AXES``)."""
-    if pass_fn in (thesis_blur_pass, vl_blur_pass):
-        return pass_fn(values, depth, BOTH_AXES, **params)
+    """``(h, hv)``: ``pass_fn`` along axis 1, then along axis 0 on its output (both buffers returned)."""
     h = pass_fn(values, depth, 1, **params)
     return h, pass_fn(h, depth, 0, **params)
