@@ -158,6 +158,44 @@ def test_the_render_program_imports_numba_without_yaml_unless_numba_has_a_file_t
     assert state("scenes")["yaml imported"]  # another command: Numba's import as always
 
 
+
+WITH_COVERAGE_INSTALLED = r"""
+import json, sys
+if sys.argv[2] == "measured":
+    import coverage  # a measurement imports coverage.py before the code it measures
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import numba.misc.coverage_support as support
+state = {"coverage imported": "coverage" in sys.modules, "numba reports to coverage": support.coverage_available}
+import coverage  # a complete import afterwards
+state["coverage works"] = coverage.Coverage.current() is None
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_numba_without_coverage_unless_a_measurement_runs(tmp_path):
+    import os
+
+    package = tmp_path / "site" / "coverage"  # a stand-in for coverage.py, installed for these processes: the names
+    package.mkdir(parents=True)               # Numba's coverage support reads
+    (package / "__init__.py").write_text("from . import types\n\n\nclass Coverage:\n    @staticmethod\n"
+                                         "    def current():\n        return None\n")
+    (package / "types.py").write_text("class Tracer:\n    pass\n\n\ndef __getattr__(name):\n    return object\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path / "site"),
+                                                                    os.environ.get("PYTHONPATH")])))
+
+    def state(command, measured):
+        proc = subprocess.run([sys.executable, "-c", WITH_COVERAGE_INSTALLED, command, measured], capture_output=True,
+                              text=True, check=True, env=env)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+
+    assert state("render", "not measured") == {"coverage imported": False, "numba reports to coverage": False,
+                                               "coverage works": True}
+    measured = {"coverage imported": True, "numba reports to coverage": True, "coverage works": True}
+    assert state("render", "measured") == measured
+    assert state("scenes", "not measured") == measured  # another command: Numba's import as always
+
+
 AHEAD_PROCESS = r"""
 import json, sys
 import numba.core.entrypoints

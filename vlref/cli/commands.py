@@ -67,14 +67,14 @@ def program_command(name: str):
     collections walking them (10 % of the import's CPU time on the dev box), and the objects that exist then
     frozen out of its sight (:func:`gc.freeze`, see :func:`main`). For a command of :data:`OWN_KERNELS_ONLY` it
     declares the process one that runs vlref's kernels alone (:func:`vlref.processes.declare_own_kernels_only`)
-    and imports Numba without PyYAML where Numba has no file to read with it (:func:`_numba_without_yaml`)."""
+    and imports Numba without the optional packages it does without there (:func:`_numba_alone`)."""
     own = name in OWN_KERNELS_ONLY
     if own:
         declare_own_kernels_only()
     enabled = gc.isenabled()
     gc.disable()
     try:
-        with _numba_without_yaml() if own else contextlib.nullcontext():
+        with _numba_alone() if own else contextlib.nullcontext():
             return command(name)
     finally:
         gc.freeze()
@@ -86,12 +86,23 @@ NUMBA_CONFIG_FILE = ".numba_config.yaml"
 """The file of settings Numba reads from the current folder at its import, with PyYAML (``numba.core.config``)."""
 
 
-def _numba_without_yaml():
-    """A block in which ``yaml`` is not importable (:func:`vlref.processes.not_importable`) where Numba and PyYAML
-    are still to be imported and the current folder holds no :data:`NUMBA_CONFIG_FILE`. Numba's configuration imports
-    PyYAML at its import only to read that file (and warns when the file exists without PyYAML); without the file
-    its settings are the same either way, and the import of PyYAML (~0.01 s) is saved."""
-    return not_importable("yaml", "numba" not in sys.modules and not os.path.isfile(NUMBA_CONFIG_FILE))
+def _numba_alone() -> contextlib.ExitStack:
+    """A block in which Numba, where it is still to be imported, is imported without two optional packages it imports
+    only for work the process does not do (:func:`vlref.processes.not_importable`; each is a complete import later):
+
+    * PyYAML, where the current folder holds no :data:`NUMBA_CONFIG_FILE`: Numba's configuration imports it only to
+      read that file (and warns when the file exists without PyYAML); without the file its settings are the same
+      either way (~0.01 s);
+    * coverage.py, where it is not imported yet: Numba imports it (``numba.misc.coverage_support``) to report the
+      lines it compiles to a coverage measurement running in the process, and a measurement imports coverage.py
+      before the code it measures (``coverage run``, its start-up hook): where it is not imported, no measurement
+      runs to report to (0.12 s of the import on the device, whose Python has coverage.py installed).
+    """
+    fresh = "numba" not in sys.modules
+    block = contextlib.ExitStack()
+    block.enter_context(not_importable("yaml", fresh and not os.path.isfile(NUMBA_CONFIG_FILE)))
+    block.enter_context(not_importable("coverage", fresh))
+    return block
 
 
 def build_parser() -> argparse.ArgumentParser:
