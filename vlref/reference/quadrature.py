@@ -120,30 +120,38 @@ def gk(a, b, ray, ctx, rule, tc, h):
     c = 0.5 * (a + b)
     half = 0.5 * (b - a)
     k0 = k1 = k2 = g0 = g1 = g2 = a0 = a1 = a2 = 0.0
-    for i in range(m):  # the symmetric pairs, then the centre (the order of the sums is part of the bits)
-        p0, p1, p2 = integrand(c - half * xgk[i], ray, ctx, tc, h)
-        q0, q1, q2 = integrand(c + half * xgk[i], ray, ctx, tc, h)
-        s0, s1, s2 = p0 + q0, p1 + q1, p2 + q2
-        k0 += wgk[i] * s0
-        k1 += wgk[i] * s1
-        k2 += wgk[i] * s2
-        a0 += wgk[i] * (abs(p0) + abs(q0))
-        a1 += wgk[i] * (abs(p1) + abs(q1))
-        a2 += wgk[i] * (abs(p2) + abs(q2))
-        if i % 2 == 1:
-            g0 += wg[i // 2] * s0
-            g1 += wg[i // 2] * s1
-            g2 += wg[i // 2] * s2
-    f0, f1, f2 = integrand(c, ray, ctx, tc, h)
-    k0 += wgk[m] * f0
-    k1 += wgk[m] * f1
-    k2 += wgk[m] * f2
-    a0 += wgk[m] * abs(f0)
-    a1 += wgk[m] * abs(f1)
-    a2 += wgk[m] * abs(f2)
-    g0 += wg[m // 2] * f0
-    g1 += wg[m // 2] * f1
-    g2 += wg[m // 2] * f2
+    p0 = p1 = p2 = 0.0
+    # one call site of the integrand (node j: the pair i = j // 2 below (even j) and above (odd j) the centre, then the
+    # centre): each site is a copy of the integrand's call, or of its code where it is compiled in. The sums take the
+    # symmetric pairs, then the centre (the order of the sums is part of the bits).
+    for j in range(2 * m + 1):
+        i = j // 2
+        x = c if j == 2 * m else (c - half * xgk[i] if j % 2 == 0 else c + half * xgk[i])
+        f0, f1, f2 = integrand(x, ray, ctx, tc, h)
+        if j == 2 * m:
+            k0 += wgk[m] * f0
+            k1 += wgk[m] * f1
+            k2 += wgk[m] * f2
+            a0 += wgk[m] * abs(f0)
+            a1 += wgk[m] * abs(f1)
+            a2 += wgk[m] * abs(f2)
+            g0 += wg[m // 2] * f0
+            g1 += wg[m // 2] * f1
+            g2 += wg[m // 2] * f2
+        elif j % 2 == 0:
+            p0, p1, p2 = f0, f1, f2
+        else:
+            s0, s1, s2 = p0 + f0, p1 + f1, p2 + f2
+            k0 += wgk[i] * s0
+            k1 += wgk[i] * s1
+            k2 += wgk[i] * s2
+            a0 += wgk[i] * (abs(p0) + abs(f0))
+            a1 += wgk[i] * (abs(p1) + abs(f1))
+            a2 += wgk[i] * (abs(p2) + abs(f2))
+            if i % 2 == 1:
+                g0 += wg[i // 2] * s0
+                g1 += wg[i // 2] * s1
+                g2 += wg[i // 2] * s2
     k0 *= half
     k1 *= half
     k2 *= half
@@ -178,10 +186,14 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc
     for i in range(n_edges - 1):
         if edges[i + 1] > edges[i]:
             lo[n], hi[n] = edges[i], edges[i + 1]
-            val[n, 0], val[n, 1], val[n, 2], err[n] = gk(lo[n], hi[n], ray, ctx, rule, tc, h)
             frozen[n] = False
             n += 1
+    halved = -1  # the interval just halved (its left half), evaluated with the new intervals fresh..n-1
+    fresh = 0
     while True:
+        for j in range(fresh - 1 if halved >= 0 else fresh, n):  # one call site of gk
+            i = halved if j < fresh else j
+            val[i, 0], val[i, 1], val[i, 2], err[i] = gk(lo[i], hi[i], ray, ctx, rule, tc, h)
         t0 = t1 = t2 = 0.0
         e_sum = 0.0
         worst = -1
@@ -201,12 +213,12 @@ def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc
         m = 0.5 * (a + b)
         if not (a < m < b) or (b - a) <= 1e-14 * max(1.0, abs(m)):
             frozen[worst] = True
+            halved, fresh = -1, n
             continue
         hi[worst] = m
-        val[worst, 0], val[worst, 1], val[worst, 2], err[worst] = gk(a, m, ray, ctx, rule, tc, h)
         lo[n], hi[n] = m, b
-        val[n, 0], val[n, 1], val[n, 2], err[n] = gk(m, b, ray, ctx, rule, tc, h)
         frozen[n] = False
+        halved, fresh = worst, n
         n += 1
 
 
@@ -252,11 +264,10 @@ def shadow_boundaries(light, a, b, samples, width, ray, ctx, out, n_out):
                     hi = mid
             out[n_out] = 0.5 * (lo + hi)
             n_out += 1
-            f_lo = ig.inscatter(lo, ray, ctx)
-            f_hi = ig.inscatter(hi, ray, ctx)
             peak = 0.0
-            for ch in range(3):
-                peak = max(peak, abs(f_lo[ch]), abs(f_hi[ch]))
+            for end in (lo, hi):  # one call site of the integrand
+                f = ig.inscatter(end, ray, ctx)
+                peak = max(peak, abs(f[0]), abs(f[1]), abs(f[2]))
             widths += (hi - lo) * peak
         prev_t, prev_v = t, v
     return n_out, widths
