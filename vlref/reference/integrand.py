@@ -362,7 +362,7 @@ def light_leg_depth(x, y, z, lx, ly, lz, dist, ctx):
     return segment_depth(ctx.medium.params, ctx.medium.noise, x, y, z, lx, ly, lz, 0.0, far)
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def inscatter(t, ray, ctx):
     """The integrand ``f(t)`` (RGB radiance per metre) of the module docstring."""
     mp, lattice = ctx.medium.params, ctx.medium.noise
