@@ -309,6 +309,8 @@ def inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack):
             tr *= clear * tint[o, 0]
             tg *= clear * tint[o, 1]
             tb *= clear * tint[o, 2]
+    if geo.node_min.shape[0] == 0:  # no triangles: no call (ten arrays and their reference counts); tr * 1 is tr
+        return tr, tg, tb
     mr, mg, mb = bvh_transmittance(geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0, geo.e1,
                                    geo.e2, geo.tri_obj, geo.opacity, geo.tint, ray, tmin, tmax, stack)
     return tr * mr, tg * mg, tb * mb
