@@ -277,7 +277,7 @@ def shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack=None):
     return inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack):
     """:func:`shadow_transmittance` compiled into its caller's loop, with the any-hit traversal of the primitives'
     tree: a call passes the geo tuple's ~25 arrays and returns through memory, which cost the scene colour's

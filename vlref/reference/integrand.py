@@ -117,7 +117,7 @@ def build_context(scene, frame) -> ReferenceContext:
                             traversal_stack())
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def with_stack(ctx, stack):
     """``ctx`` with the traversal scratch ``stack`` (:func:`vlref.geometry.traversal_stack`)."""
     return ReferenceContext(ctx.geo, ctx.lights, ctx.shadows, ctx.medium, ctx.light_extinction, ctx.bounded, stack)
@@ -128,12 +128,12 @@ def max_split_points(ctx, shadow_samples):
     return 4 + ctx.lights.ints.shape[0] * (8 + shadow_samples)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def light_count(ctx):
     return ctx.lights.ints.shape[0]
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def casts_shadows(light, ctx):
     return ctx.shadows[light, R_SHADOWS] != 0.0
 
@@ -320,7 +320,7 @@ def segment_depth(mp, lattice, px, py, pz, ux, uy, uz, a, b):
     return mp[M_ST] * total
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def view_optical_depth(ray, a, b, ctx):
     """Optical depth of the camera ray between ``t = a`` and ``t = b``."""
     return segment_depth(ctx.medium.params, ctx.medium.noise, ray[0], ray[1], ray[2], ray[3], ray[4], ray[5], a, b)
@@ -328,20 +328,20 @@ def view_optical_depth(ray, a, b, ctx):
 
 # ---------------------------------------------------------------------------------------------- lights
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def light_geometry(light, x, y, z, ctx):
     """Unit vector toward the light, distance (inf: directional) and unshadowed ``E_l`` RGB
     (:func:`vlref.lights.shading.light_incidence`, the function the march calls)."""
     return light_incidence(ctx.lights, light, x, y, z)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def _shadow(light, x, y, z, lx, ly, lz, dist, ctx):
     tr, tg, tb = inline_shadow_transmittance(ctx.geo, x, y, z, lx, ly, lz, dist, ctx.stack)
     return apply_strength(ctx.shadows[light, R_STRENGTH], tr, tg, tb)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def visibility(light, t, ray, ctx):
     """RGB visibility ``V`` of ``light`` from ``x(t)`` (1 for lights without shadows)."""
     x, y, z = ray[0] + t * ray[3], ray[1] + t * ray[4], ray[2] + t * ray[5]
@@ -351,7 +351,7 @@ def visibility(light, t, ray, ctx):
     return _shadow(light, x, y, z, lx, ly, lz, dist, ctx)
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def light_leg_depth(x, y, z, lx, ly, lz, dist, ctx):
     """Optical depth from ``x`` toward the light (module docstring for directional lights)."""
     if not ctx.light_extinction:

@@ -89,7 +89,7 @@ from the shared counter once per eight pixels."""
 RAYS_PER_BAND = 12_500
 
 
-@njit(cache=True, fastmath=False, forceinline=True)
+@njit(cache=True, fastmath=False, inline="always")
 def integrand(u, ray, ctx, tc, h):
     """``f`` in the variable of integration (RGB): ``f(u)`` itself where ``h = 0``, else ``f(t) dt/du`` at
     ``t = tc + h tan u``, ``dt/du = h (1 + tan² u)`` (:func:`vlref.reference.integrand.peak_substitution`)."""
@@ -172,7 +172,7 @@ def scratch(max_intervals, max_splits):
             np.empty(cap), np.empty(cap, dtype=np.bool_))
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def adaptive(edges, n_edges, ray, ctx, rel_tol, abs_tol, max_intervals, rule, tc, h, work):
     """Global adaptive Gauss–Kronrod (``rule``, :func:`gk`) over the pieces ``edges[0..n_edges-1]`` (in the
     variable of :func:`integrand`, ``tc`` and ``h``), at most ``max(max_intervals, n_edges)`` intervals, in the
@@ -237,7 +237,7 @@ def bisection_width(rel_tol):
     return 1e-3 * rel_tol * rel_tol * rel_tol if rel_tol > 1e-3 else 1e-12
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def shadow_boundaries(light, a, b, samples, width, ray, ctx, out, n_out):
     """Append to ``out`` the visibility changes of ``light`` on ``[a, b]`` found on a uniform grid of
     ``samples`` steps and bisected to ``width max(1, t)`` (:func:`bisection_width`); returns ``(n_out, Σ |Δt|
@@ -273,7 +273,7 @@ def shadow_boundaries(light, a, b, samples, width, ray, ctx, out, n_out):
     return n_out, widths
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, inline="always")
 def pixel_integral(ray, t1, ctx, rel_tol, abs_tol, shadow_samples, max_intervals, rule, work):
     """Inscatter (RGB), error bound, interval count, convergence flag and number of shadow boundaries
     found, for one pixel ray on ``[0, t1]`` (``work``: the thread's :func:`scratch`)."""
