@@ -109,7 +109,8 @@ def gk(a, b, ray, ctx, rule, tc, h):
 
     The nodes are symmetric: ``xgk[i]`` (descending, ``xgk[m] = 0`` the centre), Kronrod weights ``wgk[i]``; the
     Gauss nodes are the odd ``i`` and the centre (``m`` odd for every rule: 7, 3, 1), Gauss weight ``wg[i // 2]``.
-    The sums are scalars per channel (no arrays: this is the reference's innermost loop)."""
+    The sums are scalars per channel (no arrays: this is the reference's innermost loop). The integrand is compiled
+    in (:func:`vlref.reference.integrand.inscatter`), at one site: the nodes are one loop."""
     if rule == 7:
         xgk, wgk, wg = XGK7, WGK7, WG3
     elif rule == 3:
