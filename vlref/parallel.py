@@ -179,7 +179,6 @@ def work(function, *args) -> Work:
     return _WORK[key]
 
 
-
 def workers(tasks: int) -> int:
     """The ``prange`` iterations of a kernel whose threads take ``tasks`` tasks (module docstring): one per thread
     of Numba's thread count, no more than the tasks, at least one. Which thread takes which task changes no result."""
