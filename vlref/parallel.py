@@ -28,6 +28,15 @@ they contend for those counters' cache lines. A borrowed view has no counter, so
 does nothing. It does not keep its memory alive either: borrow only inside the kernel that received the
 array as an argument (its owner outlives the call).
 
+**Calls that carry arrays** (``inline="always"``). A borrowed array still costs its calls: every call from one
+compiled function to another passes each array of its arguments (tuples' included) and calls Numba's runtime twice
+per array (``NRT_incref``, ``NRT_decref``), which does nothing for a borrowed array but is never inlined, not even
+where LLVM inlines the callee (``forceinline``). A small function called per sample with a record of ~30 arrays (the
+reference's integrand and its context) spends more in those calls than in its arithmetic (12 % of the quadrature's
+samples; BENCHMARKS.md "The integrand compiled into the quadrature's loop"). Such functions are compiled into their
+callers' Numba IR instead (``inline="always"``), which removes the call and the counts; each call site is then a
+copy of the code, so their callers keep one call site each.
+
 **Work called by address** (:func:`work`). A ``parallel=True`` kernel is a thin shell: a ``prange`` whose
 body calls the function that does the work (the row or task function). Called as Numba calls any compiled
 function, that function's whole call tree is linked into the caller's LLVM module, and Numba optimises and

@@ -88,7 +88,7 @@ def prims_closest(node_min, node_max, node_first, node_count, order, kind, row, 
 def prims_occluded(node_min, node_max, node_first, node_count, order, kind, row, ray, tmin, tmax, stack=None):
     """Whether any primitive of the tree is crossed in ``(tmin, tmax)`` of ``ray = (ox, oy, oz, dx, dy, dz)``
     (any-hit traversal, early exit; ``stack`` as :func:`prims_closest`'s). Compiled into the caller's Numba IR
-    (``inline="always"``): a call, even one LLVM inlines, adds and drops a reference count on each array."""
+    (:mod:`vlref.parallel`, "Calls that carry arrays")."""
     entered, ix, iy, iz, stack = enter_root(node_min, node_max, ray, tmin, tmax, stack)
     if not entered:
         return False

@@ -282,10 +282,9 @@ def inline_shadow_transmittance(geo, ox, oy, oz, dx, dy, dz, tmax, stack):
     """:func:`shadow_transmittance` compiled into its caller's loop, with the any-hit traversal of the primitives'
     tree: a call passes the geo tuple's ~25 arrays and returns through memory, which cost the scene colour's
     shadow rays of the bench scene ~8x their time (one thread: 118 → 15 ms at 480x270, four lights; BENCHMARKS.md
-    "The scene colour's shadow rays inlined"). Compiled into the caller's Numba IR (``inline="always"``), not by
-    LLVM's ``forceinline``, which kept a reference count added and dropped on each of those arrays per ray. For
-    kernels whose pixel loop traces them (the scene colour, the quadrature reference); the other callers keep one
-    compiled copy (:func:`shadow_transmittance`)."""
+    "The scene colour's shadow rays inlined"). Compiled into the caller's Numba IR (:mod:`vlref.parallel`, "Calls
+    that carry arrays"). For kernels whose pixel loop traces them (the scene colour, the quadrature reference); the
+    other callers keep one compiled copy (:func:`shadow_transmittance`)."""
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm == 0.0:
         return 1.0, 1.0, 1.0

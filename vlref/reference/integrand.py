@@ -366,10 +366,9 @@ def light_leg_depth(x, y, z, lx, ly, lz, dist, ctx):
 def inscatter(t, ray, ctx):
     """The integrand ``f(t)`` (RGB radiance per metre) of the module docstring.
 
-    Numba compiles it, and every helper here that takes the context, into its caller's IR (``inline="always"``): a
-    call, even one LLVM inlines (``forceinline``), passes the context's ~30 arrays and adds and drops a reference count
-    on each (a call to the runtime per array, borrowed or not), for a few dozen operations. Its callers keep one call
-    site each (:func:`vlref.reference.quadrature.gk`, the shadow search): every site is a copy of its code."""
+    Numba compiles it, and every helper here that takes the context (~30 arrays), into its caller's IR
+    (:mod:`vlref.parallel`, "Calls that carry arrays"); its callers keep one call site each
+    (:func:`vlref.reference.quadrature.gk`, the shadow search)."""
     mp, lattice = ctx.medium.params, ctx.medium.noise
     x, y, z = ray[0] + t * ray[3], ray[1] + t * ray[4], ray[2] + t * ray[5]
     s_s, _ = sigma(mp, lattice, x, y, z)
