@@ -25,7 +25,11 @@ leave threads idle), and the workers get every array without reference counts (:
 All rays start at the camera, so the rays of a row lie in one plane, those of a column in another: the rays whose
 row or column plane passes beside the primitive tree's root box cannot cross any of its primitives and are cast
 without the tree (:func:`tree_spans`; the same bits). A fresh G-buffer costs the first touch of its new pages (the OS
-zeroes each one), which is why only 44 bytes a pixel are written.
+zeroes each one), which is why only 44 bytes a pixel are written. They are allocated empty and the kernel writes
+every element, the sky's zero normals included: ``np.zeros`` of the 50 MB of normals is free where the memory comes
+fresh from the OS, but where glibc serves it from freed heap memory ``calloc`` clears it on the calling thread
+first (26-34 ms on the dev box, BENCHMARKS.md "Numba's initialisation deferred to the first compile"); the kernel
+writes those zeros on every thread instead.
 """
 
 from __future__ import annotations
@@ -176,6 +180,7 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
             if obj < 0:
                 depth[y, x] = np.inf
                 distance[y, x] = np.inf
+                normal[y, x, 0], normal[y, x, 1], normal[y, x, 2] = 0.0, 0.0, 0.0
                 continue
             depth[y, x] = t * cos_f[x]
             distance[y, x] = t
@@ -206,7 +211,7 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
     geo = (build_geometry(scene) if geometry is None else geometry).arrays
     h, w = camera.height, camera.width
     dirs = np.ascontiguousarray(camera.ray_directions(copy=False))  # read only: the camera's own array
-    buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), normal=np.zeros((h, w, 3)),
+    buf = GBuffer(depth=np.empty((h, w)), distance=np.empty((h, w)), normal=np.empty((h, w, 3)),
                   object_id=np.empty((h, w), dtype=np.int32),
                   origin=np.ascontiguousarray(camera.position, dtype=np.float64), directions=dirs,
                   object_albedo=geo.albedo, object_emission=geo.emission)
