@@ -1,0 +1,132 @@
+"""The parts of two stages of the whole ``vlref render`` of (b) at 1920x1080 in fresh processes, two trees alternated
+on one machine (BENCHMARKS.md, "The ray cast's stage and the EXR files written side by side"): run after
+``whole_render_ab.py`` with the same ``CACHE_ROOT``, whose caches it uses.
+
+    python3 benchmarks/render_parts.py OUT_DIR ROUNDS A_TREE B_TREE [CACHE_ROOT]
+
+1. ``ROUNDS`` rounds of A, B, F, F, B, A (F: A's tree with Numba initialised in full before the render, as
+   before its initialisation was deferred to the first compile): a fresh process of the tree imports what
+   ``vlref render`` imports, renders (b) at 1080p x 64 with ``render_to_folder`` and ends with ``exit_at_once``; inside its ray-cast stage the wall time
+   and minor page faults of each part: the camera's rays, ``tree_spans``, ``work`` (the rows' kernel loaded), the
+   launcher's first call (its load and the first parallel launch), the same call again on the same buffers
+   (the kernel alone, warm), and the whole ``raycast`` (the rest: the buffers' allocation, the arguments).
+2. ``ROUNDS`` rounds of S, C, C, S in B's tree: the same render, its files written by ``save_buffers`` one file
+   after another (S: the form before the files were written side by side) or B's own (C); the write stage's
+   wall time.
+
+Writes ``OUT_DIR/render_parts.json``.
+"""
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+from pathlib import Path
+
+CHILD = """
+import json, pickle, resource, sys, tempfile, time
+def now():
+    return time.perf_counter(), resource.getrusage(resource.RUSAGE_SELF).ru_minflt
+from vlref.cli.commands import exit_at_once, program_command
+command = program_command("render")
+rc = sys.modules["vlref.geometry.raycast"]  # the package's attribute of that name is the function
+import vlref.io.render_files as rf
+from vlref.camera import Camera
+parts = {}
+def timed(name, fn, again=False):
+    def wrapper(*a, **k):
+        s = now()
+        out = fn(*a, **k)
+        e = now()
+        if name in parts:  # the first call only (the rays are asked for again, cached, by the march)
+            return out
+        parts[name] = [e[0] - s[0], e[1] - s[1]]
+        if again:
+            s = now()
+            fn(*a, **k)
+            e = now()
+            parts[name + " again"] = [e[0] - s[0], e[1] - s[1]]
+        return out
+    return wrapper
+Camera.ray_directions = timed("rays", Camera.ray_directions)
+rc.tree_spans = timed("tree_spans", rc.tree_spans)
+rc.work = timed("work", rc.work)
+rc._raycast_kernel = timed("kernel", rc._raycast_kernel, again=True)
+rc.raycast = timed("raycast", rc.raycast)
+if sys.argv[2] == "F":  # Numba initialised in full before the render, as before its deferred initialisation
+    from vlref.jit_init import initialise_numba
+    initialise_numba(compiling=True)
+if sys.argv[2] == "S":
+    from vlref.io.exr import channel_dict, write_exr
+    def sequential(out_dir, buffers, metadata=None, half=()):
+        import concurrent.futures
+        from pathlib import Path
+        from vlref.processes import host_cores
+        out_dir = Path(out_dir)
+        with concurrent.futures.ThreadPoolExecutor(max(1, min(len(buffers), host_cores()))) as pool:
+            channels = list(pool.map(lambda array: channel_dict(array, None), buffers.values()))
+        return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
+                for name, data in zip(buffers, channels)]
+    rf.save_buffers = sequential
+import vlref.render
+vlref.render.raycast = rc.raycast
+with open(sys.argv[1], "rb") as fh:
+    scene = pickle.load(fh)
+with tempfile.TemporaryDirectory() as folder:
+    result, _, write_s, _ = command.render_to_folder(scene, folder + "/out")
+    parts["write"] = [write_s, None]
+parts["stages"] = result.timings
+print(json.dumps(parts), flush=True)
+exit_at_once(0)
+"""
+
+SCENE = """
+import pickle, sys
+from vlref.bench import bench_scene
+open(sys.argv[1], "wb").write(pickle.dumps(bench_scene(1920, 1080, 64, "four", 1024)))
+"""
+
+
+def main(out_dir: str, rounds: int, a: str, b: str, cache_root: str = "/tmp/wrab") -> None:
+    out = Path(out_dir)
+    trees = {"A": Path(a).resolve(), "B": Path(b).resolve()}
+    scene = Path(cache_root) / "render_parts_scene.pickle"
+
+    def run(label: str, code: str, *args: str) -> dict:
+        tree = trees[label]
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tree), os.environ.get("PYTHONPATH", "")]),
+                   NUMBA_CACHE_DIR=f"{cache_root}/{label.lower()}")
+        proc = subprocess.run([sys.executable, "-c", code, *args], env=env, cwd=tree, capture_output=True, text=True,
+                              check=True)
+        return json.loads(proc.stdout.strip().splitlines()[-1]) if proc.stdout.strip() else {}
+
+    run("B", SCENE, str(scene))
+    report = {"trees": {k: str(v) for k, v in trees.items()}, "raycast": {"A": [], "B": [], "F": []},
+              "write": {"S": [], "C": []}}
+
+    def medians(runs: list) -> dict:
+        names = [n for n in runs[0] if n not in ("stages", "write")]
+        return {n: round(statistics.median(r[n][0] for r in runs), 4) for n in names} | {
+            n + " faults": statistics.median(r[n][1] for r in runs) for n in names}
+
+    for _ in range(rounds):
+        for label in ("A", "B", "F", "F", "B", "A"):
+            parts = run("A" if label == "F" else label, CHILD, str(scene), label)
+            report["raycast"][label].append(parts)
+            print("raycast", label, json.dumps({k: v for k, v in parts.items() if k != "stages"}), flush=True)
+    report["raycast_medians"] = {k: medians(v) for k, v in report["raycast"].items()}
+    print("raycast medians", json.dumps(report["raycast_medians"]), flush=True)
+    (out / "render_parts.json").write_text(json.dumps(report, indent=1))
+    for _ in range(rounds):
+        for mode in ("S", "C", "C", "S"):
+            parts = run("B", CHILD, str(scene), mode)
+            report["write"][mode].append(parts)
+            print("write", mode, round(parts["write"][0], 4), json.dumps(parts["stages"]), flush=True)
+    report["write_medians"] = {k: statistics.median(r["write"][0] for r in v) for k, v in report["write"].items()}
+    print("write medians", json.dumps(report["write_medians"]), flush=True)
+    (out / "render_parts.json").write_text(json.dumps(report, indent=1))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], *sys.argv[5:])
