@@ -1,5 +1,5 @@
 """The parts of two stages of the whole ``vlref render`` of (b) at 1920x1080 in fresh processes, two trees alternated
-on one machine (BENCHMARKS.md, "The ray cast's stage and the EXR files written side by side"): run after
+on one machine (BENCHMARKS.md, "Kernels loaded ahead on a thread, EXR files side by side, the ray cast's stage"): run after
 ``whole_render_ab.py`` with the same ``CACHE_ROOT``, whose caches it uses.
 
     python3 benchmarks/render_parts.py OUT_DIR ROUNDS A_TREE B_TREE [CACHE_ROOT]
@@ -13,6 +13,8 @@ on one machine (BENCHMARKS.md, "The ray cast's stage and the EXR files written s
 2. ``ROUNDS`` rounds of S, C, C, S in B's tree: the same render, its files written by ``save_buffers`` one file
    after another (S: the form before the files were written side by side) or B's own (C); the write stage's
    wall time.
+3. ``ROUNDS`` rounds of L, C, C, L in B's tree: the same render with (C) or without (L) the kernels loaded ahead on
+   a thread (:func:`vlref.ahead.compile_ahead`); the render's stages and ``render_to_folder``'s wall time.
 
 Writes ``OUT_DIR/render_parts.json``.
 """
@@ -57,6 +59,9 @@ rc.raycast = timed("raycast", rc.raycast)
 if sys.argv[2] == "F":  # Numba initialised in full before the render, as before its deferred initialisation
     from vlref.jit_init import initialise_numba
     initialise_numba(compiling=True)
+if sys.argv[2] == "L":  # no kernel loaded ahead on a thread
+    import vlref.ahead
+    vlref.ahead._to_load_ahead = lambda scene, cold: []
 if sys.argv[2] == "S":
     from vlref.io.exr import channel_dict, write_exr
     def sequential(out_dir, buffers, metadata=None, half=()):
@@ -74,8 +79,10 @@ vlref.render.raycast = rc.raycast
 with open(sys.argv[1], "rb") as fh:
     scene = pickle.load(fh)
 with tempfile.TemporaryDirectory() as folder:
+    start = time.perf_counter()
     result, _, write_s, _ = command.render_to_folder(scene, folder + "/out")
     parts["write"] = [write_s, None]
+    parts["render_to_folder"] = [time.perf_counter() - start, None]
 parts["stages"] = result.timings
 print(json.dumps(parts), flush=True)
 exit_at_once(0)
@@ -103,10 +110,10 @@ def main(out_dir: str, rounds: int, a: str, b: str, cache_root: str = "/tmp/wrab
 
     run("B", SCENE, str(scene))
     report = {"trees": {k: str(v) for k, v in trees.items()}, "raycast": {"A": [], "B": [], "F": []},
-              "write": {"S": [], "C": []}}
+              "write": {"S": [], "C": []}, "load": {"L": [], "C": []}}
 
     def medians(runs: list) -> dict:
-        names = [n for n in runs[0] if n not in ("stages", "write")]
+        names = [n for n in runs[0] if n not in ("stages", "write", "render_to_folder")]
         return {n: round(statistics.median(r[n][0] for r in runs), 4) for n in names} | {
             n + " faults": statistics.median(r[n][1] for r in runs) for n in names}
 
@@ -118,15 +125,25 @@ def main(out_dir: str, rounds: int, a: str, b: str, cache_root: str = "/tmp/wrab
     report["raycast_medians"] = {k: medians(v) for k, v in report["raycast"].items()}
     print("raycast medians", json.dumps(report["raycast_medians"]), flush=True)
     (out / "render_parts.json").write_text(json.dumps(report, indent=1))
-    for _ in range(rounds):
-        for mode in ("S", "C", "C", "S"):
-            parts = run("B", CHILD, str(scene), mode)
-            report["write"][mode].append(parts)
-            print("write", mode, round(parts["write"][0], 4), json.dumps(parts["stages"]), flush=True)
-    report["write_medians"] = {k: statistics.median(r["write"][0] for r in v) for k, v in report["write"].items()}
-    print("write medians", json.dumps(report["write_medians"]), flush=True)
-    (out / "render_parts.json").write_text(json.dumps(report, indent=1))
+    def in_branch(section: str, modes: tuple) -> None:
+        """``rounds`` rounds of ``modes`` in B's tree; per mode the medians of the write, ``render_to_folder`` and
+        each stage."""
+        for _ in range(rounds):
+            for mode in modes:
+                parts = run("B", CHILD, str(scene), mode)
+                report[section][mode].append(parts)
+                print(section, mode, round(parts["write"][0], 4), round(parts["render_to_folder"][0], 4),
+                      json.dumps(parts["stages"]), flush=True)
+        report[section + "_medians"] = {
+            k: {"write": statistics.median(r["write"][0] for r in v),
+                "render_to_folder": statistics.median(r["render_to_folder"][0] for r in v),
+                **{s: statistics.median(r["stages"][s] for r in v) for s in v[0]["stages"]}}
+            for k, v in report[section].items()}
+        print(section, "medians", json.dumps(report[section + "_medians"]), flush=True)
+        (out / "render_parts.json").write_text(json.dumps(report, indent=1))
 
+    in_branch("write", ("S", "C", "C", "S"))
+    in_branch("load", ("L", "C", "C", "L"))
 
 if __name__ == "__main__":
     main(sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], *sys.argv[5:])

@@ -15,6 +15,16 @@ on the slower one of 2026-11-23, where the frame's kernels took about 38 s of co
 the march without the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Scheduling, borrowed records, a
 leaner compile", "Tiles, Estrin's `exp`, a tighter PCF loop" and "The frame around the kernels").
 
+A warm render's later stages are **loaded ahead on a thread** instead: Numba's load of a cached kernel is part
+Python (the index, unpickling, under the GIL) and part LLVM (parsing the library's bitcode, adding its object code,
+scanning its symbols: llvmlite's calls release the GIL; ~70 % of the 10 loads of a 1080p render on the dev box), so
+a thread that loads the ray cast's, the shading's, the shadow maps' and the march's functions in the order the render
+calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the camera's rays on
+threads, the NumPy set-up of each stage); the main thread's call of a function being loaded waits for the load
+under Numba's compiler lock, as it would for its own load. Only a signature the cache holds alone is loaded (for the
+march's kernel: the one of the scene's precision and shadow-ray variant): a load ahead never adds work the render
+would not do.
+
 It imports only what a render imports anyway: ``vlref render`` imports it, and not :mod:`vlref.warmup`, which
 also imports the quadrature reference.
 """
@@ -24,6 +34,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import multiprocessing
+import threading
 from typing import Callable, Iterator
 
 import numba
@@ -31,13 +42,13 @@ import numpy as np
 
 from .camera import camera_from_settings
 from .geometry import GBuffer, build_geometry, raycast
-from .geometry.raycast import _raycast_kernel
+from .geometry.raycast import _cast_rows, _raycast_kernel
 from .jit_init import initialise_numba
 from .lights import pack_lights
-from .lights.shading import _shade, scene_colour
-from .lights.shadow_cast import _cast_face, build_shadow_maps
-from .march.physical import _march_kernel
-from .post.composite import sum_and_composite
+from .lights.shading import _shade, _shade_rows, scene_colour
+from .lights.shadow_cast import _cast_chunks, _cast_face, build_shadow_maps
+from .march.physical import _march_kernel, _march_tasks
+from .post.composite import _sum_composite, sum_and_composite
 from .processes import declare_own_kernels_only, host_cores, ignoring_sigint
 from .techniques import resolved
 from .techniques.physical import march_buffers
@@ -133,16 +144,21 @@ AHEAD: dict[str, tuple[str, object]] = {
 one); the kernel of each is the one whose cache entry says the stage is compiled."""
 
 
-def _kernel_cached(kernel, wanted=lambda sig: True) -> bool:
-    """Whether Numba's cache holds ``kernel`` for its current source with a signature ``wanted(sig)`` accepts
-    (its index, read without compiling). False when the index cannot be read."""
+def _cached_signatures(kernel, wanted=lambda sig: True) -> list:
+    """The signatures ``wanted(sig)`` accepts for which Numba's cache holds ``kernel`` for its current source (its
+    index, read without compiling); none when the index cannot be read."""
     try:
         cache = kernel._cache
         _, magic, code = cache._index_key((), kernel.targetctx.codegen())
-        return any(key[1] == magic and key[2] == code and wanted(key[0])
-                   for key in cache._cache_file._load_index())
+        return [key[0] for key in cache._cache_file._load_index()
+                if key[1] == magic and key[2] == code and wanted(key[0])]
     except Exception:  # a Numba without these internals: assume cold
-        return False
+        return []
+
+
+def _kernel_cached(kernel, wanted=lambda sig: True) -> bool:
+    """Whether Numba's cache holds ``kernel`` for its current source with a signature ``wanted(sig)`` accepts."""
+    return bool(_cached_signatures(kernel, wanted))
 
 
 def stage_cached(stage: str, scene) -> bool:
@@ -154,26 +170,77 @@ def stage_cached(stage: str, scene) -> bool:
     return _kernel_cached(AHEAD[stage][1])
 
 
+def _stages_used(scene) -> dict[str, bool]:
+    """Which stages of :data:`AHEAD` a render of ``scene`` runs."""
+    return {"march": scene.render.technique == "physical",
+            "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
+
+
 def _stages_ahead(scene) -> list[str]:
     """The stages of a render of ``scene`` worth a second process: used by the render, not cached, one per
     core beyond the first, in the order of :data:`AHEAD`."""
-    used = {"march": scene.render.technique == "physical",
-            "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
+    used = _stages_used(scene)
     return [stage for stage in AHEAD if used[stage] and not stage_cached(stage, scene)][:host_cores() - 1]
+
+
+LOADED_AHEAD: dict[str, tuple] = {
+    # stage -> the compiled functions it calls that Numba loads from its cache, in the order the render calls them
+    "raycast": (_cast_rows, _raycast_kernel),
+    "shading": (_shade_rows, _shade),
+    "shadow maps": (_cast_chunks, _cast_face),
+    "march": (_march_tasks, _march_kernel, _sum_composite),
+}
+"""What :func:`compile_ahead` loads on a thread where the stage is cached: the kernel of :data:`AHEAD` with the
+functions it calls by address (:func:`vlref.parallel.work`), and for the march the composite of its buffers."""
+
+
+def _to_load_ahead(scene, cold: list[str]) -> list[tuple]:
+    """``(function, signature)`` of :data:`LOADED_AHEAD` for the stages of ``scene``'s render that are cached (not in
+    ``cold``), where the cache holds one signature for the function's current source (for the march's kernel: one
+    of ``scene``'s precision and shadow-ray variant); where it holds several, the render loads the one it calls."""
+    dtype = np.float32 if scene.render.precision == "float32" else np.float64
+    march = _march_wanted(dtype, any(_exact(light) for light in scene.lights))
+    used = _stages_used(scene)
+    out = []
+    for stage, functions in LOADED_AHEAD.items():
+        if used[stage] and stage not in cold:
+            for function in functions:
+                sigs = _cached_signatures(function, march if function is _march_kernel else lambda sig: True)
+                if len(sigs) == 1:
+                    out.append((function, sigs[0]))
+    return out
+
+
+def _load(functions: list[tuple]) -> None:
+    """Load each ``(function, signature)`` from Numba's cache, in order, after Numba's initialisation
+    (:func:`vlref.jit_init.initialise_numba`); stops at the first that fails (the render then loads or compiles it
+    when it calls it, as without this)."""
+    initialise_numba()
+    for function, sig in functions:
+        try:
+            function.compile(sig)
+        except Exception:
+            return
 
 
 @contextlib.contextmanager
 def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
-    """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs (module
-    docstring); yields ``ready(tick)``, to be called with each render tick: it waits for the process compiling
-    the stage that comes next. A no-op where everything is cached or on one core. The processes are
-    terminated when the block exits early (an error, an interrupt)."""
+    """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs, and load the
+    cached ones on a thread (module docstring); yields ``ready(tick)``, to be called with each render tick: it
+    waits for the process compiling the stage that comes next. A no-op on one core. The processes are terminated
+    when the block exits early (an error, an interrupt); the thread ends with its current load."""
     procs = {}
+    cold = _stages_ahead(scene)
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
-        for stage in _stages_ahead(scene):
+        for stage in cold:
             procs[AHEAD[stage][0]] = spawn_context().Process(target=_compile_stage_process, args=(stage, scene),
                                                              daemon=True)
             procs[AHEAD[stage][0]].start()
+    loading = None
+    if host_cores() > 1:
+        loading = threading.Thread(target=_load, args=(_to_load_ahead(scene, cold),), name="vlref-load-ahead",
+                                   daemon=True)
+        loading.start()
 
     def ready(tick: str) -> None:
         if tick in procs:
@@ -182,6 +249,8 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     try:
         yield ready
     finally:
+        if loading is not None:
+            loading.join()
         for proc in procs.values():
             if proc.is_alive():
                 proc.terminate()

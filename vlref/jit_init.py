@@ -157,14 +157,16 @@ def initialise_numba(compiling: bool = False) -> None:
     runs, as Numba's own loading of a cached kernel does, so a kernel loaded or compiled meanwhile on another
     thread waits for it. In a process that runs vlref's kernels alone, unless the caller is about to compile
     (``compiling``: :mod:`vlref.ahead`'s processes), the part that serves only the compiler waits for the first
-    compile (module docstring, "Loading only")."""
+    compile (module docstring, "Loading only"). A second thread that calls it meanwhile waits for it to finish."""
     if _done[0]:
         return
-    _done[0] = True
     cpu_target = getattr(registry, "cpu_target", None)
     if cpu_target is None:  # a Numba without it: its first kernel initialises it
         return
     with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext(), _without_foreign_support():
+        if _done[0]:  # another thread initialised it while this one waited for the lock
+            return
+        _done[0] = True
         if own_kernels_only() and not compiling:
             _initialise_for_loading(cpu_target.target_context)
             return
