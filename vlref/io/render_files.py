@@ -27,9 +27,7 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
     written atomically; wrap the call in :func:`vlref.io.output_folders.output_dir` for an all-or-nothing set.
     The buffers named in ``half`` are stored as half floats (:func:`vlref.io.exr.write_exr`). The float32
     channels of all buffers are made on a thread per buffer (NumPy's casts release the GIL), then the files are
-    written on a thread each too (OpenEXR's writer releases the GIL; each file is compressed on OpenEXR's thread
-    pool, which the files share), so that one file's serial parts (its header, the writes of its compressed
-    blocks in order) overlap another's compression. Each file's bytes are those of writing it alone.
+    written one after another (each compressed on OpenEXR's thread pool).
     """
     out_dir = Path(out_dir)
     for name, array in buffers.items():
@@ -39,8 +37,8 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
             raise ValueError(f"buffer {name!r}: integer buffers stay float32 (half asked)")
     with concurrent.futures.ThreadPoolExecutor(max(1, min(len(buffers), host_cores()))) as pool:
         channels = list(pool.map(lambda array: channel_dict(array, None), buffers.values()))
-        return list(pool.map(lambda name, data: write_exr(out_dir / f"{name}.exr", data, metadata=metadata,
-                                                          half=name in half), buffers, channels))
+    return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
+            for name, data in zip(buffers, channels)]
 
 
 def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0,
@@ -48,7 +46,8 @@ def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: fl
     """Write a :class:`vlref.render.RenderResult`: the ``main`` buffers (all with ``stages``) as EXR
     with the result's metadata (those in ``half`` as half floats), plus (``preview``) the ``final.png`` preview at
     ``exposure`` (``png_meta``: its tEXt). The preview is encoded on a second thread while the EXR files are
-    written (zlib and OpenEXR release the GIL; :func:`save_buffers`)."""
+    written (zlib and OpenEXR release the GIL; the EXR files on a thread each as well measured no faster on the
+    device: BENCHMARKS.md, "The frame around the kernels")."""
     names = list(result.buffers) if stages else [n for n in main if n in result.buffers]
     buffers = {n: result.buffers[n] for n in names}
     if not preview:
