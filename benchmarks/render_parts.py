@@ -1,20 +1,22 @@
-"""The parts of two stages of the whole ``vlref render`` of (b) at 1920x1080 in fresh processes, two trees alternated
-on one machine (BENCHMARKS.md, "Kernels loaded ahead on a thread, EXR files side by side, the ray cast's stage"): run after
-``whole_render_ab.py`` with the same ``CACHE_ROOT``, whose caches it uses.
+"""The parts of the whole ``vlref render`` of (b) at 1920x1080 in fresh processes, two trees on one machine
+(BENCHMARKS.md, "SciPy's BLAS threads, kernels loaded ahead"): run after ``whole_render_ab.py`` with the same
+``CACHE_ROOT``, whose caches it uses.
 
     python3 benchmarks/render_parts.py OUT_DIR ROUNDS A_TREE B_TREE [CACHE_ROOT]
 
-1. ``ROUNDS`` rounds of A, B, F, F, B, A (F: A's tree with Numba initialised in full before the render, as
-   before its initialisation was deferred to the first compile): a fresh process of the tree imports what
-   ``vlref render`` imports, renders (b) at 1080p x 64 with ``render_to_folder`` and ends with ``exit_at_once``; inside its ray-cast stage the wall time
-   and minor page faults of each part: the camera's rays, ``tree_spans``, ``work`` (the rows' kernel loaded), the
-   launcher's first call (its load and the first parallel launch), the same call again on the same buffers
-   (the kernel alone, warm), and the whole ``raycast`` (the rest: the buffers' allocation, the arguments).
-2. ``ROUNDS`` rounds of S, C, C, S in B's tree: the same render, its files written by ``save_buffers`` one file
-   after another (S: the form before the files were written side by side) or B's own (C); the write stage's
-   wall time.
-3. ``ROUNDS`` rounds of L, C, C, L in B's tree: the same render with (C) or without (L) the kernels loaded ahead on
-   a thread (:func:`vlref.ahead.compile_ahead`); the render's stages and ``render_to_folder``'s wall time.
+Each run is a fresh process of a tree that imports what ``vlref render`` imports, renders (b) at 1080p x 64 with
+``render_to_folder`` and ends with ``exit_at_once``; it reports the render's stages, the write, the wall time of
+``render_to_folder``, the process's threads at the end, and inside its ray-cast stage the wall time and minor page
+faults of each part: the camera's rays, ``tree_spans``, ``work`` (the rows' kernel loaded), the launcher's first
+call (its load and the first parallel launch), the same call again on the same buffers (the kernel alone, warm),
+and the whole ``raycast`` (the rest: the buffers' allocation, the arguments).
+
+1. ``ROUNDS`` rounds of A, B, F, F, B, A (F: A's tree with Numba initialised in full before the render, as before
+   its initialisation was deferred to the first compile);
+2. ``ROUNDS`` rounds of L, C, C, L in B's tree: the render with (C) or without (L) the kernels loaded ahead on a
+   thread (:func:`vlref.ahead.compile_ahead`);
+3. ``ROUNDS`` rounds of U, C, C, U in B's tree: SciPy's BLAS loaded with (C) or without (U) its threads kept to one
+   (:mod:`vlref.jit_init`).
 
 Writes ``OUT_DIR/render_parts.json``.
 """
@@ -27,13 +29,12 @@ import sys
 from pathlib import Path
 
 CHILD = """
-import json, pickle, resource, sys, tempfile, time
+import json, os, pickle, resource, sys, tempfile, time
 def now():
     return time.perf_counter(), resource.getrusage(resource.RUSAGE_SELF).ru_minflt
 from vlref.cli.commands import exit_at_once, program_command
 command = program_command("render")
 rc = sys.modules["vlref.geometry.raycast"]  # the package's attribute of that name is the function
-import vlref.io.render_files as rf
 from vlref.camera import Camera
 parts = {}
 def timed(name, fn, again=False):
@@ -62,18 +63,10 @@ if sys.argv[2] == "F":  # Numba initialised in full before the render, as before
 if sys.argv[2] == "L":  # no kernel loaded ahead on a thread
     import vlref.ahead
     vlref.ahead._to_load_ahead = lambda scene, cold: []
-if sys.argv[2] == "S":
-    from vlref.io.exr import channel_dict, write_exr
-    def sequential(out_dir, buffers, metadata=None, half=()):
-        import concurrent.futures
-        from pathlib import Path
-        from vlref.processes import host_cores
-        out_dir = Path(out_dir)
-        with concurrent.futures.ThreadPoolExecutor(max(1, min(len(buffers), host_cores()))) as pool:
-            channels = list(pool.map(lambda array: channel_dict(array, None), buffers.values()))
-        return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
-                for name, data in zip(buffers, channels)]
-    rf.save_buffers = sequential
+if sys.argv[2] == "U":  # SciPy's BLAS loaded as Numba loads it, its threads not kept to one
+    import contextlib
+    import vlref.jit_init
+    vlref.jit_init._blas_on_one_thread = lambda when: contextlib.nullcontext()
 import vlref.render
 vlref.render.raycast = rc.raycast
 with open(sys.argv[1], "rb") as fh:
@@ -84,6 +77,7 @@ with tempfile.TemporaryDirectory() as folder:
     parts["write"] = [write_s, None]
     parts["render_to_folder"] = [time.perf_counter() - start, None]
 parts["stages"] = result.timings
+parts["threads"] = [len(os.listdir("/proc/self/task")), None]
 print(json.dumps(parts), flush=True)
 exit_at_once(0)
 """
@@ -110,10 +104,10 @@ def main(out_dir: str, rounds: int, a: str, b: str, cache_root: str = "/tmp/wrab
 
     run("B", SCENE, str(scene))
     report = {"trees": {k: str(v) for k, v in trees.items()}, "raycast": {"A": [], "B": [], "F": []},
-              "write": {"S": [], "C": []}, "load": {"L": [], "C": []}}
+              "load": {"L": [], "C": []}, "blas": {"U": [], "C": []}}
 
     def medians(runs: list) -> dict:
-        names = [n for n in runs[0] if n not in ("stages", "write", "render_to_folder")]
+        names = [n for n in runs[0] if n not in ("stages", "write", "render_to_folder", "threads")]
         return {n: round(statistics.median(r[n][0] for r in runs), 4) for n in names} | {
             n + " faults": statistics.median(r[n][1] for r in runs) for n in names}
 
@@ -135,15 +129,15 @@ def main(out_dir: str, rounds: int, a: str, b: str, cache_root: str = "/tmp/wrab
                 print(section, mode, round(parts["write"][0], 4), round(parts["render_to_folder"][0], 4),
                       json.dumps(parts["stages"]), flush=True)
         report[section + "_medians"] = {
-            k: {"write": statistics.median(r["write"][0] for r in v),
+            k: {"write": statistics.median(r["write"][0] for r in v), "threads": [r["threads"][0] for r in v],
                 "render_to_folder": statistics.median(r["render_to_folder"][0] for r in v),
                 **{s: statistics.median(r["stages"][s] for r in v) for s in v[0]["stages"]}}
             for k, v in report[section].items()}
         print(section, "medians", json.dumps(report[section + "_medians"]), flush=True)
         (out / "render_parts.json").write_text(json.dumps(report, indent=1))
 
-    in_branch("write", ("S", "C", "C", "S"))
     in_branch("load", ("L", "C", "C", "L"))
+    in_branch("blas", ("U", "C", "C", "U"))
 
 if __name__ == "__main__":
     main(sys.argv[1], int(sys.argv[2]), sys.argv[3], sys.argv[4], *sys.argv[5:])

@@ -1,13 +1,13 @@
 #!/bin/bash
 # The whole `vlref render` of (b), main against a branch on one device machine, each tree with its own Numba cache,
-# then the parts of its ray-cast stage and of its writing (BENCHMARKS.md, "Kernels loaded ahead on a thread, EXR
-# files side by side, the ray cast's stage"). Run in the lead's checkout on the device with .dev/MAIN and .dev/BRANCH carried, the
+# then the parts of its ray-cast stage and of the branch's changes (BENCHMARKS.md, "SciPy's BLAS threads, kernels
+# loaded ahead"). Run in the lead's checkout on the device with .dev/MAIN and .dev/BRANCH carried, the
 # wheels installed into /tmp/site and PYTHONPYCACHEPREFIX set:
 #     bash .dev/BRANCH/benchmarks/render_parts_device.sh MAIN BRANCH PAIRS ROUNDS
 # 1. everything the processes import byte-compiled into PYTHONPYCACHEPREFIX (the device's NumPy has no .pyc files);
 # 2. benchmarks/whole_render_ab.py: both caches filled, PAIRS rounds of main, branch, branch, main, outputs hashed;
-# 3. benchmarks/render_parts.py: ROUNDS rounds of the ray cast's parts, of the two ways of writing, of the render
-#    with and without the kernels loaded ahead.
+# 3. benchmarks/render_parts.py: ROUNDS rounds of the ray cast's parts, of the render with and without the kernels
+#    loaded ahead, and with and without SciPy's BLAS kept to one thread.
 set -e
 MAIN=$1 BRANCH=$2 PAIRS=${3:-4} ROUNDS=${4:-2}
 ROOT=$PWD

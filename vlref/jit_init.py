@@ -47,8 +47,17 @@ Numba's ``numba:compile`` event (its public event API: the dispatcher triggers i
 compiles) puts the target's own ``refresh`` back and runs it, without cffi and the extension scan as above, before
 the first kernel that the process compiles: a cold cache compiles as it always does. Dev box: the initialisation
 0.11-0.15 s -> 0.05-0.06 s; device, the whole render's geometry stage (the initialisation and the BVH build) 0.20 ->
-0.07 s, its ray cast 0.07 -> 0.12 s (not explained; BENCHMARKS.md "Numba's initialisation deferred to the first
-compile").
+0.07 s, its ray cast 0.07 -> 0.12 s (explained since: SciPy's BLAS threads, below; BENCHMARKS.md "Numba's
+initialisation deferred to the first compile").
+
+**SciPy's BLAS on one thread** (in a process that runs vlref's kernels alone): loading
+``scipy.linalg.cython_blas`` loads SciPy's OpenBLAS, which starts a thread per core beyond the first, and each new
+thread spins (``sched_yield``) for about 2^28 cycles (~0.1 s) before it sleeps. Right after the initialisation
+the render computes the camera's rays (NumPy on a thread per core), which then shared the cores with 15 spinning
+threads: on the 16-core device 0.072 s against 0.036 s with the initialisation in full, which ends ~0.1 s later
+(BENCHMARKS.md "SciPy's BLAS threads, kernels loaded ahead"). No vlref kernel calls a BLAS, so there the library
+is loaded with ``OPENBLAS_NUM_THREADS=1`` (unless the user set it): it starts no thread; a BLAS call in compiled
+code runs on the calling thread.
 """
 
 from __future__ import annotations
@@ -83,6 +92,25 @@ def _without_foreign_support():
     if own and not getattr(entrypoints, "_already_initialized", True):
         entrypoints._already_initialized = True
     return not_importable("cffi", own and "numba.core.typing.cffi_utils" not in sys.modules)
+
+
+BLAS_THREADS_VARIABLE = "OPENBLAS_NUM_THREADS"
+"""The variable OpenBLAS reads its thread count from when its library is loaded."""
+
+
+@contextlib.contextmanager
+def _blas_on_one_thread(when: bool) -> Iterator[None]:
+    """A block in which a BLAS library loaded (SciPy's OpenBLAS, by ``scipy.linalg.cython_blas``) starts no threads
+    of its own: :data:`BLAS_THREADS_VARIABLE` set to 1 for the block's duration where ``when`` and the user has not
+    set it (module docstring, "SciPy's BLAS on one thread")."""
+    if not when or BLAS_THREADS_VARIABLE in os.environ:
+        yield
+        return
+    os.environ[BLAS_THREADS_VARIABLE] = "1"
+    try:
+        yield
+    finally:
+        os.environ.pop(BLAS_THREADS_VARIABLE, None)
 
 
 def _cython_blas_alone():
@@ -163,7 +191,8 @@ def initialise_numba(compiling: bool = False) -> None:
     cpu_target = getattr(registry, "cpu_target", None)
     if cpu_target is None:  # a Numba without it: its first kernel initialises it
         return
-    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext(), _without_foreign_support():
+    with getattr(compiler_lock, "global_compiler_lock", None) or contextlib.nullcontext(), \
+            _without_foreign_support(), _blas_on_one_thread(own_kernels_only()):
         if _done[0]:  # another thread initialised it while this one waited for the lock
             return
         _done[0] = True
