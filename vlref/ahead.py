@@ -213,8 +213,8 @@ def _to_load_ahead(scene, cold: list[str]) -> list[tuple]:
 
 def _load(functions: list[tuple]) -> None:
     """Load each ``(function, signature)`` from Numba's cache, in order, after Numba's initialisation
-    (:func:`vlref.jit_init.initialise_numba`); stops at the first that fails (the render then loads or compiles it
-    when it calls it, as without this)."""
+    (:func:`vlref.jit_init.initialise_numba`); where an entry cannot be loaded after all, Numba compiles it here, as
+    the render's call would have; an error stops the thread (the render then meets it in its own call)."""
     initialise_numba()
     for function, sig in functions:
         try:
