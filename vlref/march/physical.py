@@ -112,9 +112,9 @@ from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_D
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
 from ..lights.shading import cookie_rgb, light_vector
 from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map_coords, exact_visibility, map_lit,
-                                    pcf_blend, pcf_taps, spot_map_coords)
+                                    pcf_blend, pcf_texels, spot_map_coords, texel_offset, tiled_side)
 from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
-                                  S_STRENGTH)
+                                  S_STRENGTH, S_TILE)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
@@ -207,10 +207,13 @@ def reuses_distance(s):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
-def set_texels(q, taps, m, u, v, res, first):
+def set_texels(q, taps, m, u, v, res, side, shift, first):
     """Lane ``m``'s four PCF texels around ``(u, v)`` on a ``res``² face whose first texel is ``first``
-    (:func:`~vlref.lights.shadow_lookup.pcf_taps`: offsets clamped to the face) and their weights."""
-    (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
+    (:func:`~vlref.lights.shadow_lookup.pcf_texels`: clamped to the face) and their weights; the face stored in
+    tiles of ``2^shift`` texels, ``side`` a side (:func:`~vlref.lights.shadow_lookup.texel_offset`)."""
+    (r0, r1, c0, c1), (w00, w10, w01, w11) = pcf_texels(u, v, res)
+    k00, k10 = texel_offset(r0, c0, side, shift), texel_offset(r0, c1, side, shift)
+    k01, k11 = texel_offset(r1, c0, side, shift), texel_offset(r1, c1, side, shift)
     set_lane(q, Q_W00, m, w00)
     set_lane(q, Q_W10, m, w10)
     set_lane(q, Q_W01, m, w01)
@@ -396,8 +399,9 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _spot_texels(s, q, taps, n, lf, k, res):
-    """Where the samples fall in spot light ``k``'s map of ``res``² texels: depth, in front of the light
+def _spot_texels(s, q, taps, n, lf, k, res, shift):
+    """Where the samples fall in spot light ``k``'s map of ``res``² texels (in tiles of ``2^shift``): depth, in front
+    of the light
     (:func:`~vlref.lights.shadow_lookup.spot_map_coords`), the texels around ``(u, v)``. The depth is the distance
     to the light: in float64 the light stage's (:func:`reuses_distance`)."""
     prefer_wide_vectors()
@@ -407,30 +411,33 @@ def _spot_texels(s, q, taps, n, lf, k, res):
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
     dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
     tan_half = float(lf[k, F_TAN_HALF])
+    side = tiled_side(res, shift)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
                                              dx, dy, dz, tan_half)
         set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if ahead else 0.0)
-        set_texels(q, taps, m, u, v, res, np.uint64(0))
+        set_texels(q, taps, m, u, v, res, side, shift, np.uint64(0))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _cube_texels(s, q, taps, n, lf, k, res):
-    """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis, the
+def _cube_texels(s, q, taps, n, lf, k, res, shift):
+    """Where the samples fall in point light ``k``'s cube map of ``res``² faces (in tiles of ``2^shift``): the face of
+    the major axis, the
     radial distance (:func:`~vlref.lights.shadow_lookup.cube_map_coords`; in float64 the light stage's,
     :func:`reuses_distance`), the texels around ``(u, v)`` on the face."""
     prefer_wide_vectors()
     reuse = reuses_distance(s)
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
-    face_texels = np.uint64(res * res)
+    side = tiled_side(res, shift)
+    face_texels = np.uint64(side * side)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         face, u, v, d_ref, on_face = cube_map_coords(float(x) - px, float(y) - py, float(z) - pz)
         set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if on_face else 0.0)
-        set_texels(q, taps, m, u, v, res, np.uint64(face) * face_texels)
+        set_texels(q, taps, m, u, v, res, side, shift, np.uint64(face) * face_texels)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -443,7 +450,8 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
     rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
     dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
-    res = sm_i[k, S_RES]
+    res, shift = sm_i[k, S_RES], sm_i[k, S_TILE]
+    side = tiled_side(res, shift)
     for m in range(n):
         set_lane(q, Q_U, m, 0.5)
         set_lane(q, Q_V, m, 0.5)
@@ -453,7 +461,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
     for c in range(sm_i[k, S_CASCADES] - 1, -1, -1):
         j = S_CASC + 5 * c
         cx, cy, cz, radius, back = sm_f[k, j], sm_f[k, j + 1], sm_f[k, j + 2], sm_f[k, j + 3], sm_f[k, j + 4]
-        first = np.uint64(c * res * res)
+        first = np.uint64(c * side * side)
         for m in range(n):
             x, y, z = lane3(s, R_POS, m)
             u, v, d_ref, inside = cascade_map_coords(float(x) - cx, float(y) - cy, float(z) - cz, radius, back,
@@ -467,7 +475,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
             set_lane(q, Q_ON_MAP, m, 1.0 if inside else on0)
             set_lane(taps, T_FACE, m, first if inside else first0)
     for m in range(n):
-        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, lane(taps, T_FACE, m))
+        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, side, shift, lane(taps, T_FACE, m))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -500,13 +508,13 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     lf = lights.floats
     sm_i, data = shadows.ints, shadows.data
     if mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
-        res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
+        res, shift, ubase = sm_i[k, S_RES], sm_i[k, S_TILE], np.uint64(sm_i[k, S_OFFSET])
         if kind == KIND_SPOT:
-            _spot_texels(s, q, taps, n, lf, k, res)
+            _spot_texels(s, q, taps, n, lf, k, res, shift)
         elif kind == KIND_DIRECTIONAL:
             _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
         else:
-            _cube_texels(s, q, taps, n, lf, k, res)
+            _cube_texels(s, q, taps, n, lf, k, res, shift)
         # the lit fraction; lanes that scatter nothing or that the map does not cover keep V = 1 in the loop after
         _lit_fraction(q, taps, n, data, ubase)
         for m in range(n):  # V, the light's strength applied
