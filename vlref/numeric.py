@@ -140,6 +140,25 @@ def arrays_do_not_overlap(typingctx):
     return types.none(), codegen
 
 
+@intrinsic
+def prefetch(typingctx, array, index):
+    """A hint that ``array[index]`` will be read soon: LLVM's ``llvm.prefetch`` (a read, kept in every cache level)
+    on its address. Changes no value; an index outside the array is harmless (a prefetch never faults)."""
+    if not (isinstance(array, types.Array) and isinstance(index, types.Integer)):
+        return None
+
+    def codegen(context, builder, signature, args):
+        i8p, i32 = ir.IntType(8).as_pointer(), ir.IntType(32)
+        address = builder.bitcast(builder.gep(context.make_array(array)(context, builder, args[0]).data, [args[1]]),
+                                  i8p)
+        function = builder.module.declare_intrinsic("llvm.prefetch", [i8p],
+                                                    ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]))
+        builder.call(function, [address, i32(0), i32(3), i32(1)])
+        return context.get_dummy_value()
+
+    return types.none(array, index), codegen
+
+
 _INV_LN2 = 1.4426950408889634
 _LN2_HI = 6.93147180369123816490e-01  # fdlibm ln2_hi: n * _LN2_HI is exact for |n| < 2^20
 _LN2_LO = 1.90821492927058770002e-10

@@ -119,7 +119,7 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
-from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
+from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, prefetch, zero_one
 from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..phase import hg
 from .segments import light_segment
@@ -160,7 +160,9 @@ R_COS = 34 * LANES  # cos θ = -l · (the spot's axis), the cone's argument
 # weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
 QROWS = 9
 Q_U, Q_V, Q_DREF, Q_ON_MAP, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
-T_FACE, T_00, T_10, T_01, T_11 = range(0, 5 * LANES, LANES)
+# then the first tap's offset at the last step (the next step's is extrapolated from it and prefetched)
+TROWS = 6
+T_FACE, T_00, T_10, T_01, T_11, T_LAST = range(0, TROWS * LANES, LANES)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
@@ -214,6 +216,7 @@ def set_texels(q, taps, m, u, v, res, side, shift, first):
     (r0, r1, c0, c1), (w00, w10, w01, w11) = pcf_texels(u, v, res)
     k00, k10 = texel_offset(r0, c0, side, shift), texel_offset(r0, c1, side, shift)
     k01, k11 = texel_offset(r1, c0, side, shift), texel_offset(r1, c1, side, shift)
+
     set_lane(q, Q_W00, m, w00)
     set_lane(q, Q_W10, m, w10)
     set_lane(q, Q_W01, m, w01)
@@ -479,7 +482,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _lit_fraction(q, taps, n, data, ubase):
+def _lit_fraction(q, taps, n, data, ubase, below):
     """The PCF lit fraction of every lane (:func:`~vlref.lights.shadow_lookup.pcf_blend` of its taps, always inside
     the map: :func:`~vlref.lights.shadow_lookup.pcf_taps` clamps them) from the maps' ``data`` at ``ubase``. No
     branch, and the arrays are declared apart (:func:`vlref.numeric.arrays_do_not_overlap`): LLVM then reads the
@@ -491,6 +494,12 @@ def _lit_fraction(q, taps, n, data, ubase):
         set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
                                         lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m), lane(q, Q_W01, m),
                                         lane(q, Q_W11, m), lane(q, Q_DREF, m)))
+    for m in range(n):  # the texels the next step will probably read: this step's first tap, extrapolated
+        now = lane(taps, T_00, m)
+        ahead = now + now - lane(taps, T_LAST, m)
+        set_lane(taps, T_LAST, m, now)
+        prefetch(data, ubase + ahead)
+        prefetch(data, ubase + ahead + below)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -516,7 +525,7 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
         else:
             _cube_texels(s, q, taps, n, lf, k, res, shift)
         # the lit fraction; lanes that scatter nothing or that the map does not cover keep V = 1 in the loop after
-        _lit_fraction(q, taps, n, data, ubase)
+        _lit_fraction(q, taps, n, data, ubase, np.uint64(texel_offset(1, 0, tiled_side(res, shift), shift)))
         for m in range(n):  # V, the light's strength applied
             lit = lane(q, Q_LIT, m)
             fr, _, _ = apply_strength(strength, lit, lit, lit)
@@ -605,7 +614,7 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
     w = t_end.shape[1]
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
-    taps = np.empty(5 * LANES, dtype=np.uint64)
+    taps = np.zeros(TROWS * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
