@@ -36,7 +36,7 @@ from numba.extending import intrinsic, overload
 from .jit import njit
 
 __all__ = ["cast", "zero_one", "is_float64", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
-           "glibc_exp", "glibc_exp_normal"]
+           "prefetch", "glibc_exp", "glibc_exp_normal"]
 
 
 def cast(like, value):

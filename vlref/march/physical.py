@@ -89,6 +89,15 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
   under the condition; with the arrays declared apart, :func:`_lit_fraction`, hardware gathers on AVX-512),
   then ``V`` (vectorised).
+* Shadow-map texels (BENCHMARKS.md "The march: the shadow maps in tiles of texels, the next step's texels
+  prefetched"): the march reads the maps of :attr:`~vlref.lights.shadow_pack.ShadowMaps.march_table`, whose PCF
+  maps are stored in tiles of 8 x 8 texels (:func:`~vlref.lights.shadow_lookup.texel_offset`), so that a lane's four
+  taps and a packet's lanes fall in fewer cache lines and pages than in rows of 1024 texels (the same texels read).
+  After the reads, a scalar loop prefetches for each lane the texel its first tap will probably be at the next step
+  (this step's offset extrapolated from the last one's) and the texel a row below: the reads then wait less on the
+  memory (:func:`vlref.numeric.prefetch`; a prediction that misses costs a wasted prefetch, never a value). On
+  the dev box (Zen 4, one thread) neither changes the time measurably (the gathers' stall halves, the addressing
+  adds as much); on the device: BENCHMARKS.md.
 * Height fog: in a noiseless fog the fog exponent is linear in the step index, so the density is
   ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
   ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
@@ -664,7 +673,9 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
-    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadow_pack.ShadowTable`;
+    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadow_pack.ShadowTable`:
+    the maps row by row (``ShadowMaps.table``) or the PCF maps in tiles (``ShadowMaps.march_table``, what
+    :func:`vlref.techniques.physical.march_buffers` passes; module docstring, "Performance"), the same bits;
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").
