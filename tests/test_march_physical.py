@@ -386,34 +386,3 @@ def test_the_packet_scratch_rows_tile_the_scratch_without_overlap():
     lanes = physical_march.LANES
     cells = sorted(off + k * lanes for name, off in rows.items() for k in range(3 if name in triple else 1))
     assert cells == list(range(0, physical_march.ROWS * lanes, lanes))
-
-
-@pytest.mark.parametrize("precision", ["float64", "float32"])
-def test_the_march_reads_the_same_texels_from_tiled_maps(precision):
-    """The march takes ShadowMaps.march_table (its PCF maps in tiles of texels, padded where the tile does not divide
-    the resolution: 60² spot maps, 30² cube faces, 60² cascades) and gives the bits it gives with the maps row by
-    row (ShadowMaps.table), shadows included."""
-    import dataclasses
-
-    from vlref.bench.config import bench_scene
-    from vlref.render import prepare_frame
-
-    base = bench_scene(24, 16, 8, "four", 60)
-    scene = dataclasses.replace(base, render=dataclasses.replace(base.render, precision=precision))
-    frame = prepare_frame(scene)
-    dtype = np.dtype(precision)
-    maps = frame.shadow_maps()
-    assert maps.march_table.data.size > maps.data.size  # padded tiles
-
-    def march(table):
-        per, trans = np.empty((4, 16, 24, 3), dtype=dtype), np.empty((16, 24), dtype=dtype)
-        march_physical(np.asarray(frame.camera.position, dtype=dtype), frame.camera.ray_directions().astype(dtype),
-                       np.minimum(frame.gbuffer.distance, scene.render.max_distance).astype(dtype),
-                       np.full((16, 24), 0.5, dtype=dtype), 8, pack_medium(scene, dtype), frame.lights.astype(dtype),
-                       table, None, True, 3, per, trans, (np.int64(0), np.int64(16)))
-        return per, trans
-
-    rows, tiles = march(maps.table), march(maps.march_table)
-    assert np.array_equal(rows[0], tiles[0]) and np.array_equal(rows[1], tiles[1])
-    lit, _ = march(dataclasses.replace(maps, data=np.full_like(maps.data, np.inf)).march_table)  # every tap lit
-    assert (lit > rows[0]).sum(axis=(1, 2, 3)).min() > 0  # every light's map shadows some pixel

@@ -1,7 +1,6 @@
 """Shadow maps agree with exact shadow rays away from shadow edges (spot, point cube faces, directional
 cascades), coloured transparent occluders, buffer names."""
 
-import dataclasses
 import math
 
 import numpy as np
@@ -11,8 +10,8 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
 from vlref.lights.shadow_cast import build_shadow_maps, cascade_splits
-from vlref.lights.shadow_lookup import cube_map_coords, shadow_visibility, texel_offset, tiled_side
-from vlref.lights.shadow_pack import CUBE_FACES, S_OFFSET, S_RES, S_TILE, TILE_SHIFT, tile_face
+from vlref.lights.shadow_lookup import cube_map_coords, shadow_visibility
+from vlref.lights.shadow_pack import CUBE_FACES
 from vlref.scene.model import (CameraSettings, Light, Material, Plane, Scene, ShadowSettings, Sphere)
 
 SPHERES = (((0.0, 1.5, 3.0), 0.6), ((2.5, 0.0, 0.0), 0.5), ((-2.0, 0.3, -1.0), 0.5), ((0.0, -2.2, 0.4), 0.6),
@@ -161,44 +160,3 @@ def test_cube_map_coords_are_the_face_table_lookup():
         assert u == 0.5 + 0.5 * ((w[0] * right[0] + w[1] * right[1] + w[2] * right[2]) / ma)
         assert v == 0.5 - 0.5 * ((w[0] * up[0] + w[1] * up[1] + w[2] * up[2]) / ma)
     assert cube_map_coords(0.0, 0.0, 0.0)[4] is False
-
-
-@pytest.mark.parametrize("res, shift", [(13, 3), (16, 3), (24, 2), (7, 0)])
-def test_a_tiled_face_holds_every_texel_where_texel_offset_says(res, shift):
-    """tile_face pads a face to a whole number of tiles and stores it tile by tile; texel_offset finds each texel
-    (shift 0: row by row, the public layout)."""
-    face = np.random.default_rng(res).random((res, res)).astype(np.float32)
-    side = tiled_side(res, shift)
-    assert side % (1 << shift) == 0 and res <= side < res + (1 << shift)
-    out = np.full(side * side, np.nan, dtype=np.float32)
-    tile_face(face, shift, out)
-    rows, cols = np.divmod(np.arange(res * res), res)
-    offsets = np.array([texel_offset(int(r), int(c), side, shift) for r, c in zip(rows, cols)])
-    assert np.array_equal(out[offsets], face.ravel())
-    assert len(set(offsets.tolist())) == res * res and not np.isnan(out).any()  # padding written, nothing twice
-    if shift == 0:
-        assert np.array_equal(offsets, np.arange(res * res))
-
-
-def test_the_march_table_tiles_the_pcf_maps_and_keeps_the_others():
-    """ShadowMaps.march_table: a PCF light's faces in tiles (S_TILE, its own first texel), a hard light's row by row;
-    every texel of every public buffer found where texel_offset says."""
-    spot = {"type": "spot", "position": (0.0, 6.0, 0.0), "direction": (0.0, -1.0, 0.0), "spot_angle": 60.0,
-            "range": 20.0}
-    point = {"type": "point", "position": (0.0, 5.0, 0.0), "range": 20.0}
-    lights = (Light(**{**spot, "shadows": ShadowSettings(filter="pcf", resolution=20)}),
-              Light(**{**point, "shadows": ShadowSettings(filter="hard", resolution=12)}),
-              Light(**{**point, "shadows": ShadowSettings(filter="pcf", resolution=12)}))
-    scene = dataclasses.replace(_scene(spot, "pcf"), lights=lights)
-    cam = camera_from_settings(scene.camera, 32, 24)
-    maps = build_shadow_maps(scene, cam, build_geometry(scene), pack_lights(scene))
-    table = maps.march_table
-    assert list(table.ints[:, S_TILE]) == [TILE_SHIFT, 0, TILE_SHIFT] and maps.table.ints[:, S_TILE].max() == 0
-    for name, light, _, _ in maps.names:
-        res, shift = int(table.ints[light, S_RES]), int(table.ints[light, S_TILE])
-        side = tiled_side(res, shift)
-        face = CUBE_FACES.index(next(f for f in CUBE_FACES if name.endswith(f[0]))) if "point" in name else 0
-        rows, cols = np.divmod(np.arange(res * res), res)
-        at = [table.ints[light, S_OFFSET] + face * side * side + texel_offset(int(r), int(c), side, shift)
-              for r, c in zip(rows, cols)]
-        assert np.array_equal(table.data[at], maps.buffers()[name].ravel()), name

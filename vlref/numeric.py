@@ -36,7 +36,7 @@ from numba.extending import intrinsic, overload
 from .jit import njit
 
 __all__ = ["cast", "zero_one", "is_float64", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
-           "prefetch", "glibc_exp", "glibc_exp_normal"]
+           "glibc_exp", "glibc_exp_normal"]
 
 
 def cast(like, value):
@@ -138,25 +138,6 @@ def arrays_do_not_overlap(typingctx):
         return context.get_dummy_value()
 
     return types.none(), codegen
-
-
-@intrinsic
-def prefetch(typingctx, array, index):
-    """A hint that ``array[index]`` will be read soon: LLVM's ``llvm.prefetch`` (a read, kept in every cache level)
-    on its address. Changes no value; an index outside the array is harmless (a prefetch never faults)."""
-    if not (isinstance(array, types.Array) and isinstance(index, types.Integer)):
-        return None
-
-    def codegen(context, builder, signature, args):
-        i8p, i32 = ir.IntType(8).as_pointer(), ir.IntType(32)
-        address = builder.bitcast(builder.gep(context.make_array(array)(context, builder, args[0]).data, [args[1]]),
-                                  i8p)
-        function = builder.module.declare_intrinsic("llvm.prefetch", [i8p],
-                                                    ir.FunctionType(ir.VoidType(), [i8p, i32, i32, i32]))
-        builder.call(function, [address, i32(0), i32(3), i32(1)])
-        return context.get_dummy_value()
-
-    return types.none(array, index), codegen
 
 
 _INV_LN2 = 1.4426950408889634

@@ -25,7 +25,7 @@ from .shadow_pack import (S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES, S_STRENGT
                           SHADOW_NONE, SHADOW_PCF)
 
 __all__ = ["shadow_visibility", "map_lit", "exact_visibility", "apply_strength", "spot_map_coords", "cube_map_coords",
-           "cascade_map_coords", "sample_map", "pcf_texels", "pcf_taps", "pcf_blend", "tiled_side", "texel_offset"]
+           "cascade_map_coords", "sample_map", "pcf_taps", "pcf_blend"]
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -37,11 +37,11 @@ def _tap(data, tint, base, tbase, k, d_ref):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def pcf_texels(u, v, res):
-    """The 2x2 PCF texels around ``(u, v)`` on a ``res``² face: rows and columns ``(r0, r1, c0, c1)`` (clamped to
-    the edge) and bilinear weights ``(w00, w10, w01, w11)`` of texels ``(c0, r0), (c1, r0), (c0, r1), (c1, r1)``.
-    Scalars only: the march computes them in a vectorised lane loop. The column is clamped to [-1, res] in floating
-    point before the conversion to a 32-bit integer (the same texels; no overflow far outside the map)."""
+def pcf_taps(u, v, res):
+    """The 2x2 PCF taps around ``(u, v)`` on a ``res``² face: texel offsets ``row · res + col`` (clamped to the
+    edge) ``(k00, k10, k01, k11)`` and bilinear weights ``(w00, w10, w01, w11)``. Scalars only: the march
+    computes them in a vectorised lane loop. The column is clamped to [-1, res] in floating point before the
+    conversion to a 32-bit integer (the same texels; no overflow far outside the map)."""
     su, sv = u * res - 0.5, v * res - 0.5
     fu, fv = math.floor(su), math.floor(sv)
     wu, wv = su - fu, sv - fv
@@ -50,33 +50,9 @@ def pcf_texels(u, v, res):
     r0 = np.int32(min(max(fv, -1.0), edge)) + 0
     c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
     r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
-    return (r0c, r1c, c0c, c1c), ((1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def pcf_taps(u, v, res):
-    """The 2x2 PCF taps around ``(u, v)`` on a ``res``² face stored row by row: texel offsets ``row · res + col``
-    ``(k00, k10, k01, k11)`` and bilinear weights ``(w00, w10, w01, w11)`` (:func:`pcf_texels`)."""
-    (r0, r1, c0, c1), weights = pcf_texels(u, v, res)
-    top, bottom = r0 * res, r1 * res
-    return (top + c0, top + c1, bottom + c0, bottom + c1), weights
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def tiled_side(res, shift):
-    """The side of a ``res``² face stored in tiles of ``2^shift`` texels a side: ``res`` rounded up to a multiple
-    of the tile's (``res`` for ``shift = 0``, row by row; :mod:`vlref.lights.shadow_pack`, "Texel layout")."""
-    return ((res + (1 << shift) - 1) >> shift) << shift
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def texel_offset(row, col, side, shift):
-    """The offset of texel ``(col, row)`` in a face of ``side`` texels a side stored in tiles of ``2^shift`` texels
-    a side (:func:`~vlref.lights.shadow_pack.tile_face`): ``(⌊row / t⌋ · side + ⌊col / t⌋ · t) · t + (row mod t) · t
-    + col mod t`` with ``t = 2^shift``; ``row · side + col`` for ``shift = 0``. A row part plus a column part: the
-    four PCF taps need two of each."""
-    mask = (1 << shift) - 1
-    return (((row >> shift) * side + (row & mask)) << shift) + ((col >> shift) << (2 * shift)) + (col & mask)
+    top, bottom = r0c * res, r1c * res
+    return ((top + c0c, top + c1c, bottom + c0c, bottom + c1c),
+            ((1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv))
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

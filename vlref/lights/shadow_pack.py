@@ -33,14 +33,6 @@ texel: the biased distance to the first transparent surface in front of the firs
 surface (``shadow_transmittance``). A tap then gives ``lit_opaque · (d_ref > d_transparent ? rgb : 1)``:
 stained glass colours the light behind it, a second-order GPU "coloured shadow map".
 
-Texel layout: every map is stored row by row (texel ``(c, r)`` of a face at ``r · res + c``) in
-:attr:`ShadowMaps.data` and :attr:`ShadowMaps.table`, what every reader and the public buffers take. The physical
-march takes :attr:`ShadowMaps.march_table`, where the maps it reads with PCF (no transparent layer) are stored in
-square tiles of ``2^s`` texels a side (``s = TILE_SHIFT``, column ``S_TILE`` of the ints; 0 = row by row): the
-face padded to ``side = ⌈res / 2^s⌉ · 2^s`` texels a side, its tiles row by row, each tile's texels row by row
-(:func:`tile_face`, :func:`vlref.lights.shadow_lookup.texel_offset`). A packet's four reads per sample then touch fewer cache lines and
-pages (BENCHMARKS.md "The march: the shadow maps in tiles of texels"); the values read are the same.
-
 Where each part lives: :mod:`vlref.lights.shadow_cast` casts the maps of a frame,
 :mod:`vlref.lights.shadow_lookup` holds the njit lookups the march calls (filters ``hard``, ``pcf``,
 ``exact``), :mod:`vlref.lights.shadow_probes` casts rays and looks up points a caller chooses (the verdict).
@@ -50,14 +42,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 
 __all__ = ["ShadowMaps", "ShadowTable", "LightMaps", "pack_shadow_maps", "CUBE_FACES", "CUBE_AXES", "FILTER_MODES",
            "SHADOW_NONE", "SHADOW_HARD", "SHADOW_PCF", "SHADOW_EXACT", "MAX_CASCADES", "S_MODE", "S_RES", "S_OFFSET",
-           "S_CASCADES", "S_TILE", "NSI", "S_STRENGTH", "S_CASC", "NSF", "TILE_SHIFT", "tile_face"]
+           "S_CASCADES", "NSI", "S_STRENGTH", "S_CASC", "NSF"]
 
 SHADOW_NONE, SHADOW_HARD, SHADOW_PCF, SHADOW_EXACT = 0, 1, 2, 3
 FILTER_MODES = {"hard": SHADOW_HARD, "pcf": SHADOW_PCF, "exact": SHADOW_EXACT}
@@ -70,9 +61,8 @@ CUBE_FACES = (("px", (0, 0, -1), (0, 1, 0), (1, 0, 0)), ("nx", (0, 0, 1), (0, 1,
 CUBE_AXES = np.array([[r, u, f] for _, r, u, f in CUBE_FACES], dtype=np.float64)
 """(6 faces, 3 axes: right, up, forward, 3) the axes of :data:`CUBE_FACES` as one array (njit lookups)."""
 
-S_MODE, S_RES, S_OFFSET, S_CASCADES, S_TILE = range(5)
-NSI = 5
-TILE_SHIFT = 3  # the march's maps in tiles of 8 x 8 texels (module docstring, "Texel layout")
+S_MODE, S_RES, S_OFFSET, S_CASCADES = range(4)
+NSI = 4
 S_STRENGTH = 0
 S_CASC = 1  # then (cx, cy, cz, radius, back) per cascade
 NSF = 1 + 5 * MAX_CASCADES
@@ -91,7 +81,7 @@ class ShadowTable(NamedTuple):
 class ShadowMaps:
     """All shadow maps of a frame, packed for njit lookups.
 
-    ints : (n_lights, NSI) int64 (mode, resolution, first texel, cascades, tile shift: 0, row by row).
+    ints : (n_lights, NSI) int64 (mode, resolution, first texel, cascades).
     floats : (n_lights, NSF) float64 (strength, then centre xyz, radius, back per cascade).
     data : (T,) float32 biased distances of every texel of every map.
     tint : (T, 4) float32 transparent layer (biased distance, r, g, b) per texel of ``data``, or
@@ -136,28 +126,6 @@ class ShadowMaps:
         """The arrays as the record the njit kernels take."""
         return ShadowTable(self.ints, self.floats, self.data, self.tint)
 
-    @cached_property
-    def march_table(self) -> ShadowTable:
-        """The record the physical march takes: :attr:`table` with the maps of PCF lights in tiles of ``2^TILE_SHIFT``
-        texels a side (module docstring, "Texel layout"), when no map has a transparent layer (with one, every
-        lookup reads the maps row by row). A copy of those maps, made on the first call."""
-        if self.tint.shape[0] or not np.any(self.ints[:, S_MODE] == SHADOW_PCF):
-            return self.table
-        ints = self.ints.copy()
-        faces, offset = [], 0  # (first texel in the copy, texels in the copy, face in data, tile shift)
-        for _, light, start, count in self.names:  # in data order, a light's faces one after the other
-            res = int(ints[light, S_RES])
-            shift = TILE_SHIFT if ints[light, S_MODE] == SHADOW_PCF else 0
-            size = (-(-res >> shift) << shift) ** 2
-            if not faces or faces[-1][4] != light:
-                ints[light, S_OFFSET], ints[light, S_TILE] = offset, shift
-            faces.append((offset, size, self.data[start:start + count].reshape(res, res), shift, light))
-            offset += size
-        data = np.empty(offset, dtype=self.data.dtype)
-        for first, size, face, shift, _ in faces:
-            tile_face(face, shift, data[first:first + size])
-        return ShadowTable(ints, self.floats, data, self.tint)
-
     def buffers(self) -> dict[str, np.ndarray]:
         """Every map as a named (res, res) float32 buffer, plus ``<name>_transparent_distance`` (res, res)
         and ``<name>_transmittance`` (res, res, 3) for maps with a transparent layer."""
@@ -186,20 +154,6 @@ class LightMaps:
     strength: float
     tiles: tuple
     cascades: tuple = ()
-
-
-def tile_face(face: np.ndarray, shift: int, out: np.ndarray) -> None:
-    """Store a (res, res) face in ``out`` (side² texels, flat) in tiles of ``2^shift`` texels a side: padded with
-    zeros (never read: a lookup clamps its texels to the face) to ``side = ⌈res / 2^shift⌉ · 2^shift``, the tiles
-    row by row, each tile's texels row by row; texel ``(c, r)`` at :func:`vlref.lights.shadow_lookup.texel_offset`
-    ``(r, c, side, shift)``. One strided copy where ``2^shift`` divides ``res``."""
-    res, t = face.shape[0], 1 << shift
-    side = -(-res // t) * t
-    if side != res:
-        padded = np.zeros((side, side), dtype=face.dtype)
-        padded[:res, :res] = face
-        face = padded
-    out.reshape(side // t, side // t, t, t).transpose(0, 2, 1, 3)[...] = face.reshape(side // t, t, side // t, t)
 
 
 def pack_shadow_maps(count: int, maps) -> ShadowMaps:

@@ -89,15 +89,6 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   branch on every lane, and the lit fraction in a row of its own keeps LLVM from moving the reads back
   under the condition; with the arrays declared apart, :func:`_lit_fraction`, hardware gathers on AVX-512),
   then ``V`` (vectorised).
-* Shadow-map texels (BENCHMARKS.md "The march: the shadow maps in tiles of texels, the next step's texels
-  prefetched"): the march reads the maps of :attr:`~vlref.lights.shadow_pack.ShadowMaps.march_table`, whose PCF
-  maps are stored in tiles of 8 x 8 texels (:func:`~vlref.lights.shadow_lookup.texel_offset`), so that a lane's four
-  taps and a packet's lanes fall in fewer cache lines and pages than in rows of 1024 texels (the same texels read).
-  After the reads, a scalar loop prefetches for each lane the texel its first tap will probably be at the next step
-  (this step's offset extrapolated from the last one's) and the texel a row below: the reads then wait less on the
-  memory (:func:`vlref.numeric.prefetch`; a prediction that misses costs a wasted prefetch, never a value). On
-  the dev box (Zen 4, one thread) neither changes the time measurably (the gathers' stall halves, the addressing
-  adds as much); on the device: BENCHMARKS.md.
 * Height fog: in a noiseless fog the fog exponent is linear in the step index, so the density is
   ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
   ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
@@ -121,14 +112,14 @@ from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_D
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
 from ..lights.shading import cookie_rgb, light_vector
 from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map_coords, exact_visibility, map_lit,
-                                    pcf_blend, pcf_texels, spot_map_coords, texel_offset, tiled_side)
+                                    pcf_blend, pcf_taps, spot_map_coords)
 from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
-                                  S_STRENGTH, S_TILE)
+                                  S_STRENGTH)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
-from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, prefetch, zero_one
+from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
 from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..phase import hg
 from .segments import light_segment
@@ -169,9 +160,7 @@ R_COS = 34 * LANES  # cos θ = -l · (the spot's axis), the cone's argument
 # weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
 QROWS = 9
 Q_U, Q_V, Q_DREF, Q_ON_MAP, Q_W00, Q_W10, Q_W01, Q_W11, Q_LIT = range(0, QROWS * LANES, LANES)
-# then the first tap's offset at the last step (the next step's is extrapolated from it and prefetched)
-TROWS = 6
-T_FACE, T_00, T_10, T_01, T_11, T_LAST = range(0, TROWS * LANES, LANES)
+T_FACE, T_00, T_10, T_01, T_11 = range(0, 5 * LANES, LANES)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
@@ -218,14 +207,10 @@ def reuses_distance(s):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", inline="always")
-def set_texels(q, taps, m, u, v, res, side, shift, first):
+def set_texels(q, taps, m, u, v, res, first):
     """Lane ``m``'s four PCF texels around ``(u, v)`` on a ``res``² face whose first texel is ``first``
-    (:func:`~vlref.lights.shadow_lookup.pcf_texels`: clamped to the face) and their weights; the face stored in
-    tiles of ``2^shift`` texels, ``side`` a side (:func:`~vlref.lights.shadow_lookup.texel_offset`)."""
-    (r0, r1, c0, c1), (w00, w10, w01, w11) = pcf_texels(u, v, res)
-    k00, k10 = texel_offset(r0, c0, side, shift), texel_offset(r0, c1, side, shift)
-    k01, k11 = texel_offset(r1, c0, side, shift), texel_offset(r1, c1, side, shift)
-
+    (:func:`~vlref.lights.shadow_lookup.pcf_taps`: offsets clamped to the face) and their weights."""
+    (k00, k10, k01, k11), (w00, w10, w01, w11) = pcf_taps(u, v, res)
     set_lane(q, Q_W00, m, w00)
     set_lane(q, Q_W10, m, w10)
     set_lane(q, Q_W01, m, w01)
@@ -411,9 +396,8 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _spot_texels(s, q, taps, n, lf, k, res, shift):
-    """Where the samples fall in spot light ``k``'s map of ``res``² texels (in tiles of ``2^shift``): depth, in front
-    of the light
+def _spot_texels(s, q, taps, n, lf, k, res):
+    """Where the samples fall in spot light ``k``'s map of ``res``² texels: depth, in front of the light
     (:func:`~vlref.lights.shadow_lookup.spot_map_coords`), the texels around ``(u, v)``. The depth is the distance
     to the light: in float64 the light stage's (:func:`reuses_distance`)."""
     prefer_wide_vectors()
@@ -423,33 +407,30 @@ def _spot_texels(s, q, taps, n, lf, k, res, shift):
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
     dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
     tan_half = float(lf[k, F_TAN_HALF])
-    side = tiled_side(res, shift)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         u, v, d_ref, ahead = spot_map_coords(float(x) - px, float(y) - py, float(z) - pz, rx, ry, rz, ux, uy, uz,
                                              dx, dy, dz, tan_half)
         set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if ahead else 0.0)
-        set_texels(q, taps, m, u, v, res, side, shift, np.uint64(0))
+        set_texels(q, taps, m, u, v, res, np.uint64(0))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _cube_texels(s, q, taps, n, lf, k, res, shift):
-    """Where the samples fall in point light ``k``'s cube map of ``res``² faces (in tiles of ``2^shift``): the face of
-    the major axis, the
+def _cube_texels(s, q, taps, n, lf, k, res):
+    """Where the samples fall in point light ``k``'s cube map of ``res``² faces: the face of the major axis, the
     radial distance (:func:`~vlref.lights.shadow_lookup.cube_map_coords`; in float64 the light stage's,
     :func:`reuses_distance`), the texels around ``(u, v)`` on the face."""
     prefer_wide_vectors()
     reuse = reuses_distance(s)
     px, py, pz = float(lf[k, F_PX]), float(lf[k, F_PY]), float(lf[k, F_PZ])
-    side = tiled_side(res, shift)
-    face_texels = np.uint64(side * side)
+    face_texels = np.uint64(res * res)
     for m in range(n):
         x, y, z = lane3(s, R_POS, m)
         face, u, v, d_ref, on_face = cube_map_coords(float(x) - px, float(y) - py, float(z) - pz)
         set_lane(q, Q_DREF, m, float(lane(s, R_DIST, m)) if reuse else d_ref)
         set_lane(q, Q_ON_MAP, m, 1.0 if on_face else 0.0)
-        set_texels(q, taps, m, u, v, res, side, shift, np.uint64(face) * face_texels)
+        set_texels(q, taps, m, u, v, res, np.uint64(face) * face_texels)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -462,8 +443,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
     rx, ry, rz = float(lf[k, F_RX]), float(lf[k, F_RY]), float(lf[k, F_RZ])
     ux, uy, uz = float(lf[k, F_UX]), float(lf[k, F_UY]), float(lf[k, F_UZ])
     dx, dy, dz = float(lf[k, F_DX]), float(lf[k, F_DY]), float(lf[k, F_DZ])
-    res, shift = sm_i[k, S_RES], sm_i[k, S_TILE]
-    side = tiled_side(res, shift)
+    res = sm_i[k, S_RES]
     for m in range(n):
         set_lane(q, Q_U, m, 0.5)
         set_lane(q, Q_V, m, 0.5)
@@ -473,7 +453,7 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
     for c in range(sm_i[k, S_CASCADES] - 1, -1, -1):
         j = S_CASC + 5 * c
         cx, cy, cz, radius, back = sm_f[k, j], sm_f[k, j + 1], sm_f[k, j + 2], sm_f[k, j + 3], sm_f[k, j + 4]
-        first = np.uint64(c * side * side)
+        first = np.uint64(c * res * res)
         for m in range(n):
             x, y, z = lane3(s, R_POS, m)
             u, v, d_ref, inside = cascade_map_coords(float(x) - cx, float(y) - cy, float(z) - cz, radius, back,
@@ -487,11 +467,11 @@ def _cascade_texels(s, q, taps, n, lf, k, sm_i, sm_f):
             set_lane(q, Q_ON_MAP, m, 1.0 if inside else on0)
             set_lane(taps, T_FACE, m, first if inside else first0)
     for m in range(n):
-        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, side, shift, lane(taps, T_FACE, m))
+        set_texels(q, taps, m, lane(q, Q_U, m), lane(q, Q_V, m), res, lane(taps, T_FACE, m))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _lit_fraction(q, taps, n, data, ubase, below):
+def _lit_fraction(q, taps, n, data, ubase):
     """The PCF lit fraction of every lane (:func:`~vlref.lights.shadow_lookup.pcf_blend` of its taps, always inside
     the map: :func:`~vlref.lights.shadow_lookup.pcf_taps` clamps them) from the maps' ``data`` at ``ubase``. No
     branch, and the arrays are declared apart (:func:`vlref.numeric.arrays_do_not_overlap`): LLVM then reads the
@@ -503,12 +483,6 @@ def _lit_fraction(q, taps, n, data, ubase, below):
         set_lane(q, Q_LIT, m, pcf_blend(data, ubase, lane(taps, T_00, m), lane(taps, T_10, m), lane(taps, T_01, m),
                                         lane(taps, T_11, m), lane(q, Q_W00, m), lane(q, Q_W10, m), lane(q, Q_W01, m),
                                         lane(q, Q_W11, m), lane(q, Q_DREF, m)))
-    for m in range(n):  # the texels the next step will probably read: this step's first tap, extrapolated
-        now = lane(taps, T_00, m)
-        ahead = now + now - lane(taps, T_LAST, m)
-        set_lane(taps, T_LAST, m, now)
-        prefetch(data, ubase + ahead)
-        prefetch(data, ubase + ahead + below)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -526,15 +500,15 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
     lf = lights.floats
     sm_i, data = shadows.ints, shadows.data
     if mode == SHADOW_PCF and shadows.tint.shape[0] == 0:
-        res, shift, ubase = sm_i[k, S_RES], sm_i[k, S_TILE], np.uint64(sm_i[k, S_OFFSET])
+        res, ubase = sm_i[k, S_RES], np.uint64(sm_i[k, S_OFFSET])
         if kind == KIND_SPOT:
-            _spot_texels(s, q, taps, n, lf, k, res, shift)
+            _spot_texels(s, q, taps, n, lf, k, res)
         elif kind == KIND_DIRECTIONAL:
             _cascade_texels(s, q, taps, n, lf, k, sm_i, shadows.floats)
         else:
-            _cube_texels(s, q, taps, n, lf, k, res, shift)
+            _cube_texels(s, q, taps, n, lf, k, res)
         # the lit fraction; lanes that scatter nothing or that the map does not cover keep V = 1 in the loop after
-        _lit_fraction(q, taps, n, data, ubase, np.uint64(texel_offset(1, 0, tiled_side(res, shift), shift)))
+        _lit_fraction(q, taps, n, data, ubase)
         for m in range(n):  # V, the light's strength applied
             lit = lane(q, Q_LIT, m)
             fr, _, _ = apply_strength(strength, lit, lit, lit)
@@ -623,7 +597,7 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
     w = t_end.shape[1]
     s = np.empty(ROWS * LANES, dtype=t_end.dtype)
     q = np.empty(QROWS * LANES, dtype=np.float64)
-    taps = np.zeros(TROWS * LANES, dtype=np.uint64)
+    taps = np.empty(5 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
     tiles_x = (w + TILE_W - 1) // TILE_W
@@ -673,9 +647,7 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
 
     origin (3,), dirs (H, W, 3) unit, t_end (H, W), offsets (H, W) in [0, 1): all in the march's float
     type, like the ``medium`` (:class:`~vlref.medium.PackedMedium`) and the float tables of ``lights``
-    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadow_pack.ShadowTable`:
-    the maps row by row (``ShadowMaps.table``) or the PCF maps in tiles (``ShadowMaps.march_table``, what
-    :func:`vlref.techniques.physical.march_buffers` passes; module docstring, "Performance"), the same bits;
+    (:class:`~vlref.lights.pack.PackedLights`). ``shadows`` a :class:`~vlref.lights.shadow_pack.ShadowTable`;
     ``geo`` the geometry tuple for ``exact`` shadows, or None where no light has them: the kernel is then
     compiled without the ray tracer (its compile takes about a third less; BENCHMARKS.md "Scheduling,
     borrowed records, a leaner compile").

@@ -58,7 +58,7 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     # (a second, smaller kernel; vlref.march.physical.march_physical)
     traced = geo if shadow_maps.traces_rays else None
     per_band = SAMPLES_PER_BAND * numba.get_num_threads()
-    args = (position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.march_table, traced,
+    args = (position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.table, traced,
             bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light, trans)
     for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band), TILE_H):
         march_physical(*args, (np.int64(y0), np.int64(y1)))
