@@ -97,6 +97,12 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
 * Compilation: counts and flags are passed as ``np.int64`` / plain ``bool`` values, never literals (a
   ``Literal[int](0)`` or ``Literal[bool](True)`` argument compiles a function a second time); ``geo`` None
   compiles the march without the ray tracer (:func:`march_physical`).
+* Measured, not adopted (BENCHMARKS.md "The march: shadow-map tiles and prefetches, measured, not adopted"): the
+  PCF maps copied into tiles of 8 x 8 texels for the march, a prefetch of each lane's next-step texels, every lane
+  loop over all ``LANES`` lanes (a constant trip count), the spot map's coordinates and reads in one loop. None was
+  faster; what binds the march is the float64 work per sample, which the float32 mode does not narrow (``exp`` and
+  ``expm1`` in float64, the map coordinates and texels in float64, the same quotients and roots), and the gathers'
+  wait on the memory (about a tenth of the time on Zen 4).
 """
 
 from __future__ import annotations
