@@ -39,5 +39,8 @@ cat "$O/post_ab.jsonl"
 python3 -c "
 import json
 for f in ('radial', 'scaling', 'blur'):
-    d = json.load(open('$O/' + f + '.json'))
+    try:
+        d = json.load(open('$O/' + f + '.json'))
+    except ValueError:
+        print(f, 'no result'); continue
     print(f, d.get('same_bits_as_first', d.get('sha256_hv')), json.dumps(d['medians']), json.dumps(d.get('scaling_ms', {})))"
