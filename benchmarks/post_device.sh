@@ -1,5 +1,5 @@
 #!/bin/bash
-# Device A/B of the radial and the bilateral blur (BENCHMARKS.md, "The radial blur's taps in pairs"): a main tree
+# Device A/B of the radial and the bilateral blur (BENCHMARKS.md, "The radial and the bilateral blur on the slow hosts"): a main tree
 # against this one on the same machine. Run from the checkout root where both trees sit, with the wheels installed in
 # /tmp/site and the environment of the device calls:
 #   bash .dev/TREE/benchmarks/post_device.sh .dev/MAIN .dev/TREE OUTDIR
@@ -9,8 +9,8 @@
 # one process).
 set -u
 M=$(cd "$1" && pwd); T=$(cd "$2" && pwd); O=$(mkdir -p "$3" && cd "$3" && pwd)
-RADIAL=${RADIAL:-"main tree single_taps int_columns tile512 run4"}
-BLUR=${BLUR:-"tree blocks1 blocks4 no_div no_exp frame"}
+RADIAL=${RADIAL:-"main tree fixed_rows first_columns no_rows"}
+BLUR=${BLUR:-"tree blocks1 no_div"}
 { lscpu; cat /sys/kernel/mm/transparent_hugepage/enabled; python3 -c "import numba, numpy, sys; print(sys.version, numpy.__version__, numba.__version__)"; } > "$O/cpu.txt" 2>&1
 SP=$(python3 -c "import numpy,os;print(os.path.dirname(os.path.dirname(numpy.__file__)))")
 STD=$(python3 -c "import sysconfig;print(sysconfig.get_paths()['stdlib'])")

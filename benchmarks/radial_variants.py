@@ -31,20 +31,19 @@ VARIANTS = {
     "run64": ("RADIAL_RUN = 16", "RADIAL_RUN = 64"),
     "ymm": ("    prefer_wide_vectors()\n    arrays_do_not_overlap()\n    for ch", "    arrays_do_not_overlap()\n    for ch"),
     "gathers": ("    rgb = C == 3\n", "    rgb = False\n"),  # RGB through the per-channel gather loop, as before
-    "three_values": ("    end = np.uint64(flat.size) - row\n", "    end = np.uint64(0)\n"),  # RGB texels read as 3 values
-    "single_taps": ("taps = 2 if rgb and i < iterations else 1", "taps = 1"),
-    "int_columns": ("""            xf = np.floor(xx)
-            tx[x] = xx - xf
-            ia[x] = np.uint64((min(max(xf, lo), hi) + offset) * C)
-            ib[x] = np.uint64((min(max(xf + 1.0, lo), hi) + offset) * C)""", """            xf = math.floor(xx)
-            tx[x] = xx - xf
-            ia[x] = (int(min(max(xf, lo), hi)) + offset) * C
-            ib[x] = (int(min(max(xf + 1.0, lo), hi)) + offset) * C"""),
+    "three_values": ("    if max(ra, rb) + row < np.uint64(flat.size):", "    if False:"),  # RGB texels read as 3 values
+    "fixed_rows": ("_tap_rows_rgb(flat, ra, rb, yy - yf,", "_tap_rows_rgb(flat, np.uint64(0), np.uint64(0), yy - yf,"),
+    "first_columns": ("                adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)\n",
+                      "                if i == 0:\n                    adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, "
+                      "repeat, tx, ia, ib)\n"),
+    "no_rows": ("_tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row, adjacent)",
+                "acc_rgb[0] += tx[0] * w if adjacent else yy"),
 }
 """One replaced text each in this tree's radial.py (``tree``: none; ``main``: ``--main``'s file as it is). ``gathers``
-and ``three_values`` (every texel read as three values, two loads and a shuffle) are the RGB kernel's predecessors;
-``single_taps``: an RGB tile's taps one at a time (each pixel's sums loaded and stored per tap); ``int_columns``: the
-texel columns as before (``math.floor``, which converts to an integer and back, and a 64-bit integer multiply)."""
+and ``three_values`` (every texel read as three values, two loads and a shuffle) are the RGB kernel's predecessors.
+Not the blur's bits, to split its time: ``fixed_rows`` (every tap reads texel row 0: the texels from the L1 cache),
+``first_columns`` (the columns of the first tap reused by the others: no column loop) and ``no_rows`` (no texel
+read: the column loop and the rest)."""
 
 
 def variant(folder: pathlib.Path, name: str, source: pathlib.Path = SOURCE, change: tuple | None = None):

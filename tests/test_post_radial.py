@@ -130,16 +130,6 @@ def test_radial_same_bits_as_the_pixel_loop_across_column_bands():
             assert np.array_equal(got, listing_13_1(img, (0.7, -0.4), 6, 6, 0.9, 0.5, 1.0, 0.95, address) * 0.37)
 
 
-@pytest.mark.parametrize("iterations", [0, 1, 2, 3, 4])
-def test_radial_rgb_taps_in_pairs_same_bits_as_the_pixel_loop(iterations):
-    # an RGB tile sums its taps two at a time, a last odd one alone; a pair of which one tap reads the image's last
-    # row (the light below the image: the first taps read it, the later ones do not) goes tap by tap
-    img = image(np.random.default_rng(13), 6, 9, 3)
-    for light in ((0.4, 1.8), (0.6, 0.2)):
-        got = disenone_scatter(img, light, 0.9, 0.6, 0.97, num_samples=4, iterations=iterations)
-        assert np.array_equal(got, listing_13_1(img, light, 4, iterations, 0.9, 0.6, 0.03125, 0.97, "clamp"))
-
-
 def test_same_bits_for_any_thread_count():
     img = image(np.random.default_rng(8), 9, 11, 3)
     runs = []

@@ -106,35 +106,35 @@ RADIAL_TILE = 256
 
 
 @njit(cache=True, fastmath=False)
-def _tap_columns(u, du, step, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
-    """Per pixel ``x < n`` of a tile: ``u[x] -= du[x]`` where ``step`` (the shaders' ``u -= delta``), then ``tx``, and
-    where the texels left and right of ``u W - 1/2`` start in an image row of ``C`` channels, ``ia``, ``ib``
-    (``column * C``, unsigned: an index that needs no sign check).
+def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
+    """Per pixel ``x < n`` of a tile: ``tx``, and where the texels left and right of ``u W - 1/2`` start in an image row of
+    ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check); returns whether
+    every right texel is the left one's neighbour in memory (``ib[x] = ia[x] + C``: no clamp, no wrap in the tile).
 
     Texel ``i`` is column ``i mod W`` when ``repeat``, else ``clamp(i, lo, hi) + offset``; the clamp is taken on
-    the integral float ``floor(x)`` (no integer overflow far off screen) and the index computed in float64 (exact:
-    an integer below ``2^53``; a float product and conversion cost less than a 64-bit integer multiply per lane).
-    :func:`_fetch_add`'s arithmetic, operation for operation.
+    the integral float ``floor(x)`` (the same index as clamping the integer, and no integer overflow far off
+    screen). :func:`_fetch_add`'s arithmetic, operation for operation.
     """
     prefer_wide_vectors()
+    apart = np.uint64(0)
     if repeat:
         for x in range(n):
-            ux = u[x] - du[x] if step else u[x]
-            u[x] = ux
-            xx = ux * W - 0.5
+            xx = u[x] * W - 0.5
             xf = math.floor(xx)
             tx[x] = xx - xf
-            ia[x] = (int(xf) % W) * C
-            ib[x] = ((int(xf) + 1) % W) * C
+            a, b = np.uint64((int(xf) % W) * C), np.uint64(((int(xf) + 1) % W) * C)
+            ia[x], ib[x] = a, b
+            apart |= b ^ (a + np.uint64(C))
     else:
         for x in range(n):
-            ux = u[x] - du[x] if step else u[x]
-            u[x] = ux
-            xx = ux * W - 0.5
-            xf = np.floor(xx)
+            xx = u[x] * W - 0.5
+            xf = math.floor(xx)
             tx[x] = xx - xf
-            ia[x] = np.uint64((min(max(xf, lo), hi) + offset) * C)
-            ib[x] = np.uint64((min(max(xf + 1.0, lo), hi) + offset) * C)
+            a = np.uint64((int(min(max(xf, lo), hi)) + offset) * C)
+            b = np.uint64((int(min(max(xf + 1.0, lo), hi)) + offset) * C)
+            ia[x], ib[x] = a, b
+            apart |= b ^ (a + np.uint64(C))
+    return apart == 0
 
 
 @njit(cache=True, fastmath=False)
@@ -164,13 +164,13 @@ def _tap_rows(flat, ra, rb, ty, tx, ia, ib, n, w, acc):
 
 def _rgb_bilinear_codegen(lanes):
     """The code of :func:`_rgb_bilinear_add` (``lanes = 4``: each texel read as four values) or
-    :func:`_rgb_bilinear_add_near_end` (``lanes = 3``), for as many taps as ``tx`` holds."""
+    :func:`_rgb_bilinear_add_near_end` (``lanes = 3``)."""
     def codegen(context, builder, signature, args):
-        flat_, rows_, columns_, tx_, tyw_, acc_, k_ = args
+        flat_, ra_, rb_, a_, b_, tx_, ty_, w_, acc_, k_ = args
         f64, i32 = ir.DoubleType(), ir.IntType(32)
         vector, v4 = ir.VectorType(f64, lanes), ir.VectorType(f64, 4)
         data = context.make_array(signature.args[0])(context, builder, flat_).data
-        sums = context.make_array(signature.args[5])(context, builder, acc_).data
+        sums = context.make_array(signature.args[8])(context, builder, acc_).data
 
         def texel(row, column):
             at = builder.gep(data, [builder.add(row, column)], inbounds=True)
@@ -181,87 +181,70 @@ def _rgb_bilinear_codegen(lanes):
             everywhere = ir.Constant(ir.VectorType(i32, lanes), [0] * lanes)
             return builder.shuffle_vector(one, ir.Constant(vector, None), everywhere)
 
+        t00, t10, t01, t11 = texel(ra_, a_), texel(ra_, b_), texel(rb_, a_), texel(rb_, b_)
+        txv = splat(tx_)
+        top = builder.fadd(t00, builder.fmul(txv, builder.fsub(t10, t00)))
+        bottom = builder.fadd(t01, builder.fmul(txv, builder.fsub(t11, t01)))
+        value = builder.fmul(builder.fadd(top, builder.fmul(splat(ty_), builder.fsub(bottom, top))), splat(w_))
+        if lanes == 3:
+            value = builder.shuffle_vector(value, ir.Constant(vector, [0.0, 0.0, 0.0]),
+                                           ir.Constant(ir.VectorType(i32, 4), [0, 1, 2, 3]))
         at = builder.bitcast(builder.gep(sums, [k_], inbounds=True), v4.as_pointer())
-        total = builder.load(at, align=8)
-        for tap in range(len(signature.args[3])):
-            ra, rb, a, b = (builder.extract_value(tuple_, 2 * tap + i) for tuple_, i in
-                            ((rows_, 0), (rows_, 1), (columns_, 0), (columns_, 1)))
-            t00, t10, t01, t11 = texel(ra, a), texel(ra, b), texel(rb, a), texel(rb, b)
-            txv = splat(builder.extract_value(tx_, tap))
-            ty, w = (splat(builder.extract_value(tyw_, 2 * tap + i)) for i in (0, 1))
-            top = builder.fadd(t00, builder.fmul(txv, builder.fsub(t10, t00)))
-            bottom = builder.fadd(t01, builder.fmul(txv, builder.fsub(t11, t01)))
-            value = builder.fmul(builder.fadd(top, builder.fmul(ty, builder.fsub(bottom, top))), w)
-            if lanes == 3:
-                value = builder.shuffle_vector(value, ir.Constant(vector, [0.0, 0.0, 0.0]),
-                                               ir.Constant(ir.VectorType(i32, 4), [0, 1, 2, 3]))
-            total = builder.fadd(total, value)
-        builder.store(total, at, align=8)
+        builder.store(builder.fadd(builder.load(at, align=8), value), at, align=8)
         return context.get_dummy_value()
 
     return codegen
 
 
-def _rgb_bilinear_signature(flat, rows, columns, tx, tyw, acc, k):
+def _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k):
     """The signature of :func:`_rgb_bilinear_add` for these argument types; None (no match) unless ``flat`` and ``acc``
-    are float64 arrays and the tuples hold one or more taps (``rows`` and ``columns`` two integers per tap, ``tx``
-    one float, ``tyw`` two)."""
+    are float64 arrays."""
     if not (isinstance(flat, types.Array) and flat.dtype == types.float64 and isinstance(acc, types.Array)
-            and acc.dtype == types.float64 and isinstance(tx, types.BaseTuple) and len(tx) >= 1
-            and all(isinstance(t, types.BaseTuple) and len(t) == 2 * len(tx) for t in (rows, columns, tyw))):
+            and acc.dtype == types.float64):
         return None
-    return types.none(flat, rows, columns, tx, tyw, acc, k)
+    return types.none(flat, ra, rb, a, b, tx, ty, w, acc, k)
 
 
 @intrinsic
-def _rgb_bilinear_add(typingctx, flat, rows, columns, tx, tyw, acc, k):
-    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel, tap after tap: tap ``t``'s
-    texels' RGB triples start at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``(ra, rb) =
-    rows[2t : 2t + 2]``, ``(a, b) = columns[2t : 2t + 2]``; ``flat`` a float64 image, flattened, three channels;
-    unsigned element indices), its weights ``tx[t]`` and ``(ty, w) = tyw[2t : 2t + 2]``. :func:`_fetch_add`'s
-    operations in its order, on a 4-lane vector: each texel is one contiguous read of four values, its RGB and the
-    value after it (the next texel's red, which must exist: ``flat`` holds at least ``max(ra, rb) + max(a, b) + 4``
-    values), so a pixel's tap is four vector loads and 11 vector operations (where a vectorised pixel loop gathers 12
-    values one lane at a time, and reading three values takes two loads and a shuffle each). ``acc[k : k + 4]`` holds
-    the pixel's sums, its fourth value the sum of that spare lane (never read); with several taps the sums are loaded
-    and stored once, ``(acc + v_0) + v_1``: the additions of tap after tap, in their order. LLVM IR without ``fast``
-    flags: IEEE operations per lane, the bits of the scalar loop. njit only."""
-    sig = _rgb_bilinear_signature(flat, rows, columns, tx, tyw, acc, k)
+def _rgb_bilinear_add(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
+    """``acc[k + ch] += w * bilinear(...)[ch]`` for the three channels ``ch`` of one pixel: the texels' RGB triples
+    start at ``flat[ra + a]``, ``flat[ra + b]``, ``flat[rb + a]``, ``flat[rb + b]`` (``flat`` a float64 image, flattened,
+    three channels; ``ra``, ``rb``, ``a``, ``b``, ``k`` unsigned element indices). :func:`_fetch_add`'s operations
+    in its order, on a 4-lane vector: each texel is one contiguous read of four values, its RGB and the value after
+    it (the next texel's red, which must exist: ``flat`` holds at least ``max(ra, rb) + max(a, b) + 4`` values), so
+    a pixel's tap is four vector loads and 11 vector operations (where a vectorised pixel loop gathers 12 values one
+    lane at a time, and reading three values takes two loads and a shuffle each). ``acc[k : k + 4]`` holds the
+    pixel's sums, its fourth value the sum of that spare lane (never read). LLVM IR without ``fast`` flags: IEEE
+    operations per lane, the bits of the scalar loop. njit only."""
+    sig = _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k)
     return None if sig is None else (sig, _rgb_bilinear_codegen(4))
 
 
 @intrinsic
-def _rgb_bilinear_add_near_end(typingctx, flat, rows, columns, tx, tyw, acc, k):
+def _rgb_bilinear_add_near_end(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k):
     """:func:`_rgb_bilinear_add` reading each texel's three values only (where the value after it may be past the end
     of ``flat``: a tap on the image's last row); the spare lane of ``acc`` gets 0."""
-    sig = _rgb_bilinear_signature(flat, rows, columns, tx, tyw, acc, k)
+    sig = _rgb_bilinear_signature(flat, ra, rb, a, b, tx, ty, w, acc, k)
     return None if sig is None else (sig, _rgb_bilinear_codegen(3))
 
 
 @njit(cache=True, fastmath=False)
-def _tap_rows_rgb(flat, rows, tyw, tx, ia, ib, n, taps, acc, row):
-    """:func:`_tap_rows` for three channels, pixel by pixel (:func:`_rgb_bilinear_add`), for ``taps`` (1 or 2)
-    consecutive taps: tap ``t``'s texel rows start at ``rows[2t]``, ``rows[2t + 1]``, its weights ``tyw[2t]`` (``ty``),
-    ``tyw[2t + 1]`` (``w``), its columns ``tx[t]``, ``ia[t]``, ``ib[t]`` (:func:`_tap_columns`); the sums of pixel
-    ``x`` in ``acc[4x : 4x + 4]``; ``row``: the values in an image row (a tap whose texel rows are followed by another
-    reads four values per texel, one on the last row three). Two taps go through each pixel's sums once."""
-    end = np.uint64(flat.size) - row
-    if taps == 2 and max(rows[0], rows[1], rows[2], rows[3]) < end:
-        r4 = (rows[0], rows[1], rows[2], rows[3])
-        w4 = (tyw[0], tyw[1], tyw[2], tyw[3])
-        tx0, tx1, ia0, ia1, ib0, ib1 = tx[0], tx[1], ia[0], ia[1], ib[0], ib[1]
+def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc, row, adjacent):
+    """:func:`_tap_rows` for three channels, pixel by pixel (:func:`_rgb_bilinear_add`): the sums of pixel ``x`` in
+    ``acc[4x : 4x + 4]``; ``row``: the values in an image row (a tap whose texel rows are followed by another reads
+    four values per texel, one on the last row three); ``adjacent``: ``ib[x] = ia[x] + 3`` for every ``x``
+    (:func:`_tap_columns`), so ``ib`` is not read."""
+    if max(ra, rb) + row < np.uint64(flat.size):
+        if adjacent:
+            for x in range(n):
+                a = ia[x]
+                _rgb_bilinear_add(flat, ra, rb, a, a + np.uint64(3), tx[x], ty, w, acc, np.uint64(4 * x))
+            return
         for x in range(n):
-            _rgb_bilinear_add(flat, r4, (ia0[x], ib0[x], ia1[x], ib1[x]), (tx0[x], tx1[x]), w4, acc, np.uint64(4 * x))
-        return
-    for t in range(taps):
-        r2, w2 = (rows[2 * t], rows[2 * t + 1]), (tyw[2 * t], tyw[2 * t + 1])
-        txt, iat, ibt = tx[t], ia[t], ib[t]
-        if max(r2[0], r2[1]) < end:
-            for x in range(n):
-                _rgb_bilinear_add(flat, r2, (iat[x], ibt[x]), (txt[x],), w2, acc, np.uint64(4 * x))
-        else:
-            for x in range(n):
-                _rgb_bilinear_add_near_end(flat, r2, (iat[x], ibt[x]), (txt[x],), w2, acc, np.uint64(4 * x))
+            _rgb_bilinear_add(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
+    else:
+        for x in range(n):
+            _rgb_bilinear_add_near_end(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
 
 
 @njit(cache=True, fastmath=False)
@@ -292,9 +275,8 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
     lo_x, hi_x = float(-offset), float(W - 1 + offset)
     lo_y, hi_y = float(-offset), float(H - 1 + offset)
     repeat = mode == ADDRESS_REPEAT
-    u, du, tx = np.empty(tile_w), np.empty(tile_w), np.empty((2, tile_w))
-    ia, ib = np.empty((2, tile_w), np.uint64), np.empty((2, tile_w), np.uint64)
-    rows, tyw = np.empty(4, np.uint64), np.empty(4)
+    u, du, tx = np.empty(tile_w), np.empty(tile_w), np.empty(tile_w)
+    ia, ib = np.empty(tile_w, np.uint64), np.empty(tile_w, np.uint64)
     rgb = C == 3
     acc = np.empty((C, tile_w))
     acc_rgb = np.empty(4 * tile_w)
@@ -314,25 +296,22 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
             dv = (v - lv) * scale
             w = 1.0
             dec = 1.0
-            i = 0
-            while i <= iterations:
-                taps = 2 if rgb and i < iterations else 1  # an RGB tile's taps in pairs (_tap_rows_rgb)
-                for t in range(taps):
-                    if i + t > 0:
-                        v = v - dv
-                        w = dec * tap_scale * weight
-                        dec = dec * decay
-                    yy = v * H - 0.5
-                    yf = math.floor(yy)
-                    rows[2 * t] = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
-                    rows[2 * t + 1] = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
-                    tyw[2 * t], tyw[2 * t + 1] = yy - yf, w
-                    _tap_columns(u, du, i + t > 0, n, W, C, lo_x, hi_x, offset, repeat, tx[t], ia[t], ib[t])
+            for i in range(iterations + 1):
+                if i > 0:
+                    for x in range(n):
+                        u[x] = u[x] - du[x]
+                    v = v - dv
+                    w = dec * tap_scale * weight
+                    dec = dec * decay
+                yy = v * H - 0.5
+                yf = math.floor(yy)
+                ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
+                rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
+                adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
                 if rgb:
-                    _tap_rows_rgb(flat, rows, tyw, tx, ia, ib, n, taps, acc_rgb, row)
+                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row, adjacent)
                 else:
-                    _tap_rows(flat, rows[0], rows[1], tyw[0], tx[0], ia[0], ib[0], n, w, acc)
-                i += taps
+                    _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
             for x in range(n):
                 for ch in range(C):
                     total = acc_rgb[4 * x + ch] if rgb else acc[ch, x]
