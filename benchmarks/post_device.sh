@@ -1,6 +1,6 @@
 #!/bin/bash
-# Device A/B of the radial and the bilateral blur (BENCHMARKS.md, "The radial and the bilateral blur on the slow hosts"): a main tree
-# against this one on the same machine. Run from the checkout root where both trees sit, with the wheels installed in
+# Device A/B of the radial and the bilateral blur (BENCHMARKS.md, "The radial and the bilateral blur: where their time
+# goes on the device"): a main tree against this one on the same machine. Run from the checkout root where both trees sit, with the wheels installed in
 # /tmp/site and the environment of the device calls:
 #   bash .dev/TREE/benchmarks/post_device.sh .dev/MAIN .dev/TREE OUTDIR
 # Writes OUTDIR/cpu.txt, post_ab.jsonl (benchmarks/post_ab.py's radial blur of both trees in fresh processes, main,

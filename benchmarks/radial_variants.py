@@ -33,16 +33,17 @@ VARIANTS = {
     "gathers": ("    rgb = C == 3\n", "    rgb = False\n"),  # RGB through the per-channel gather loop, as before
     "three_values": ("    if max(ra, rb) + row < np.uint64(flat.size):", "    if False:"),  # RGB texels read as 3 values
     "fixed_rows": ("_tap_rows_rgb(flat, ra, rb, yy - yf,", "_tap_rows_rgb(flat, np.uint64(0), np.uint64(0), yy - yf,"),
-    "first_columns": ("                adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)\n",
-                      "                if i == 0:\n                    adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, "
-                      "repeat, tx, ia, ib)\n"),
-    "no_rows": ("_tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row, adjacent)",
-                "acc_rgb[0] += tx[0] * w if adjacent else yy"),
+    "first_columns": ("                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)\n",
+                      "                if i == 0:\n                    _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, "
+                      "ia, ib)\n"),
+    "no_rows": ("_tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row)", "acc_rgb[0] += tx[0] * w + yy"),
+    "columns_ymm": ("    prefer_wide_vectors()\n    if repeat:", "    if repeat:"),
 }
 """One replaced text each in this tree's radial.py (``tree``: none; ``main``: ``--main``'s file as it is). ``gathers``
 and ``three_values`` (every texel read as three values, two loads and a shuffle) are the RGB kernel's predecessors.
-Not the blur's bits, to split its time: ``fixed_rows`` (every tap reads texel row 0: the texels from the L1 cache),
-``first_columns`` (the columns of the first tap reused by the others: no column loop) and ``no_rows`` (no texel
+``columns_ymm``: the column loop at the CPU's preferred width (256 bits on Intel's server cores). Not the blur's bits,
+to split its time: ``fixed_rows`` (every tap reads texel row 0 twice: one row, 46 KB at 1920 columns, about the L1
+cache), ``first_columns`` (the columns of the first tap reused by the others: no column loop) and ``no_rows`` (no texel
 read: the column loop and the rest)."""
 
 

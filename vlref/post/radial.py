@@ -108,33 +108,27 @@ RADIAL_TILE = 256
 @njit(cache=True, fastmath=False)
 def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
     """Per pixel ``x < n`` of a tile: ``tx``, and where the texels left and right of ``u W - 1/2`` start in an image row of
-    ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check); returns whether
-    every right texel is the left one's neighbour in memory (``ib[x] = ia[x] + C``: no clamp, no wrap in the tile).
+    ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check).
 
     Texel ``i`` is column ``i mod W`` when ``repeat``, else ``clamp(i, lo, hi) + offset``; the clamp is taken on
     the integral float ``floor(x)`` (the same index as clamping the integer, and no integer overflow far off
     screen). :func:`_fetch_add`'s arithmetic, operation for operation.
     """
     prefer_wide_vectors()
-    apart = np.uint64(0)
     if repeat:
         for x in range(n):
             xx = u[x] * W - 0.5
             xf = math.floor(xx)
             tx[x] = xx - xf
-            a, b = np.uint64((int(xf) % W) * C), np.uint64(((int(xf) + 1) % W) * C)
-            ia[x], ib[x] = a, b
-            apart |= b ^ (a + np.uint64(C))
+            ia[x] = (int(xf) % W) * C
+            ib[x] = ((int(xf) + 1) % W) * C
     else:
         for x in range(n):
             xx = u[x] * W - 0.5
             xf = math.floor(xx)
             tx[x] = xx - xf
-            a = np.uint64((int(min(max(xf, lo), hi)) + offset) * C)
-            b = np.uint64((int(min(max(xf + 1.0, lo), hi)) + offset) * C)
-            ia[x], ib[x] = a, b
-            apart |= b ^ (a + np.uint64(C))
-    return apart == 0
+            ia[x] = (int(min(max(xf, lo), hi)) + offset) * C
+            ib[x] = (int(min(max(xf + 1.0, lo), hi)) + offset) * C
 
 
 @njit(cache=True, fastmath=False)
@@ -229,17 +223,11 @@ def _rgb_bilinear_add_near_end(typingctx, flat, ra, rb, a, b, tx, ty, w, acc, k)
 
 
 @njit(cache=True, fastmath=False)
-def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc, row, adjacent):
+def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc, row):
     """:func:`_tap_rows` for three channels, pixel by pixel (:func:`_rgb_bilinear_add`): the sums of pixel ``x`` in
     ``acc[4x : 4x + 4]``; ``row``: the values in an image row (a tap whose texel rows are followed by another reads
-    four values per texel, one on the last row three); ``adjacent``: ``ib[x] = ia[x] + 3`` for every ``x``
-    (:func:`_tap_columns`), so ``ib`` is not read."""
+    four values per texel, one on the last row three)."""
     if max(ra, rb) + row < np.uint64(flat.size):
-        if adjacent:
-            for x in range(n):
-                a = ia[x]
-                _rgb_bilinear_add(flat, ra, rb, a, a + np.uint64(3), tx[x], ty, w, acc, np.uint64(4 * x))
-            return
         for x in range(n):
             _rgb_bilinear_add(flat, ra, rb, ia[x], ib[x], tx[x], ty, w, acc, np.uint64(4 * x))
     else:
@@ -307,9 +295,9 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
                 yf = math.floor(yy)
                 ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
                 rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
-                adjacent = _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
+                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
                 if rgb:
-                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row, adjacent)
+                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row)
                 else:
                     _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
             for x in range(n):
