@@ -252,7 +252,7 @@ def _radial_run(img, H, W, loop, mode, tile_w, first, end, buffers, out):
     du, tx, ia, ib, acc, acc_rgb)``, the task's scratch, owned by the caller for the call and used here without
     reference counts (:func:`~vlref.parallel.borrowed`): every tap passes four or five of them to
     :func:`_tap_columns` and :func:`_tap_rows_rgb`, and a counted array costs each call an atomic add and an atomic
-    subtract (about 16 per tap and tile, counted)."""
+    subtract (16 per tap and tile)."""
     u, du, tx, ia, ib, acc, acc_rgb = borrowed(buffers)
     lu, lv, scale, iterations, weight, tap_scale, decay, exposure, visibility = loop
     C = img.shape[2]
