@@ -322,16 +322,26 @@ def _finish_stretch(acc, wsum, n, out, r, c0):
 @njit(cache=True, fastmath=False)
 def _bilateral_block(v, z, axis, g, code, factor, epsilon, r0, r1, out):
     """Rows ``r0 <= r < r1`` of :func:`_bilateral_lines` (one work item; a separate function keeps the parallel
-    kernel small, which is most of its compile time)."""
+    kernel small, which is most of its compile time): the block's scratch, then :func:`_bilateral_rows`."""
+    H, W, C = v.shape
+    K = g.size - 1
+    scratch = (np.empty(((K + 1) * (K + 1), W)), np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K)),
+               np.zeros((C, _CHUNK)), np.zeros(_CHUNK), np.empty(W // 8 + 1, np.uint64))
+    _bilateral_rows(v, z, axis, g, code, factor, epsilon, r0, r1, scratch, out)
+
+
+@njit(cache=True, fastmath=False)
+def _bilateral_rows(v, z, axis, g, code, factor, epsilon, r0, r1, scratch, out):
+    """The rows of :func:`_bilateral_block`. ``scratch``: ``(T, rows, acc, wsum, flags)``, the depth tables, the planes,
+    the sums (zeros: a fresh tap loads them and does not use them, :func:`_sums`) and :func:`_gaussian_weights`'
+    marks, owned by the caller for the call and used here without reference counts
+    (:func:`~vlref.parallel.borrowed`): every tap of every stretch passes four of them to a function, and a counted
+    array costs each call an atomic add and an atomic subtract."""
     prefer_wide_vectors()
+    T, rows, acc, wsum, flags = borrowed(scratch)
     H, W, C = v.shape
     K = g.size - 1
     S = K + 1
-    T = np.empty(((K + 1) * S, W))
-    rows = np.empty((2 * K + 1 if axis == 0 else 1, C, W + 2 * K))
-    acc = np.zeros((C, _CHUNK))  # zeros: a fresh tap loads them and does not use them (_sums)
-    wsum = np.zeros(_CHUNK)
-    flags = np.empty(W // 8 + 1, np.uint64)
     if axis == 0:
         for p in range(max(r0 - K, 0), min(r0 + K, H)):
             _planar_row(v, p, 0, rows[p % (2 * K + 1)])

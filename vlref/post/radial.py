@@ -247,14 +247,13 @@ RADIAL_RUN = 16
 
 
 @njit(cache=True, fastmath=False)
-def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
-    """Runs of :data:`RADIAL_RUN` consecutive tiles of :func:`_radial_tiles`, taken on demand
-    (:func:`~vlref.parallel.take`) until none is left; buffers allocated once, after the first task is taken (a
-    separate function keeps the parallel kernel small, which is most of its compile time)."""
-    tiles = (W + tile_w - 1) // tile_w * H
-    first = take(taken) * RADIAL_RUN
-    if first >= tiles:  # before any allocation: most workers find no task left
-        return
+def _radial_run(img, H, W, loop, mode, tile_w, first, end, buffers, out):
+    """Tiles ``first <= tile < end`` of :func:`_radial_tiles` (one task of :func:`_radial_tasks`). ``buffers``: ``(u,
+    du, tx, ia, ib, acc, acc_rgb)``, the task's scratch, owned by the caller for the call and used here without
+    reference counts (:func:`~vlref.parallel.borrowed`): every tap passes four or five of them to
+    :func:`_tap_columns` and :func:`_tap_rows_rgb`, and a counted array costs each call an atomic add and an atomic
+    subtract (16 per tap and tile)."""
+    u, du, tx, ia, ib, acc, acc_rgb = borrowed(buffers)
     lu, lv, scale, iterations, weight, tap_scale, decay, exposure, visibility = loop
     C = img.shape[2]
     flat = img.reshape(img.size)
@@ -263,47 +262,57 @@ def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
     lo_x, hi_x = float(-offset), float(W - 1 + offset)
     lo_y, hi_y = float(-offset), float(H - 1 + offset)
     repeat = mode == ADDRESS_REPEAT
-    u, du, tx = np.empty(tile_w), np.empty(tile_w), np.empty(tile_w)
-    ia, ib = np.empty(tile_w, np.uint64), np.empty(tile_w, np.uint64)
     rgb = C == 3
-    acc = np.empty((C, tile_w))
-    acc_rgb = np.empty(4 * tile_w)
-    while first < tiles:
-        for tile in range(first, min(first + RADIAL_RUN, tiles)):
-            y = tile % H
-            x0 = (tile // H) * tile_w
-            n = min(tile_w, W - x0)
-            for x in range(n):
-                u[x] = (x0 + x + 0.5) / W
-                du[x] = (u[x] - lu) * scale
+    for tile in range(first, end):
+        y = tile % H
+        x0 = (tile // H) * tile_w
+        n = min(tile_w, W - x0)
+        for x in range(n):
+            u[x] = (x0 + x + 0.5) / W
+            du[x] = (u[x] - lu) * scale
+        if rgb:
+            acc_rgb[:] = 0.0
+        else:
+            acc[:] = 0.0
+        v = (y + 0.5) / H
+        dv = (v - lv) * scale
+        w = 1.0
+        dec = 1.0
+        for i in range(iterations + 1):
+            if i > 0:
+                for x in range(n):
+                    u[x] = u[x] - du[x]
+                v = v - dv
+                w = dec * tap_scale * weight
+                dec = dec * decay
+            yy = v * H - 0.5
+            yf = math.floor(yy)
+            ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
+            rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
+            _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
             if rgb:
-                acc_rgb[:] = 0.0
+                _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row)
             else:
-                acc[:] = 0.0
-            v = (y + 0.5) / H
-            dv = (v - lv) * scale
-            w = 1.0
-            dec = 1.0
-            for i in range(iterations + 1):
-                if i > 0:
-                    for x in range(n):
-                        u[x] = u[x] - du[x]
-                    v = v - dv
-                    w = dec * tap_scale * weight
-                    dec = dec * decay
-                yy = v * H - 0.5
-                yf = math.floor(yy)
-                ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
-                rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
-                _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
-                if rgb:
-                    _tap_rows_rgb(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc_rgb, row)
-                else:
-                    _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
-            for x in range(n):
-                for ch in range(C):
-                    total = acc_rgb[4 * x + ch] if rgb else acc[ch, x]
-                    out[y, x0 + x, ch] = (total * exposure) * visibility
+                _tap_rows(flat, ra, rb, yy - yf, tx, ia, ib, n, w, acc)
+        for x in range(n):
+            for ch in range(C):
+                total = acc_rgb[4 * x + ch] if rgb else acc[ch, x]
+                out[y, x0 + x, ch] = (total * exposure) * visibility
+
+
+@njit(cache=True, fastmath=False)
+def _radial_tasks(img, H, W, loop, mode, tile_w, taken, out):
+    """Runs of :data:`RADIAL_RUN` consecutive tiles of :func:`_radial_tiles` (:func:`_radial_run`), taken on demand
+    (:func:`~vlref.parallel.take`) until none is left; buffers allocated once, after the first task is taken (a
+    separate function keeps the parallel kernel small, which is most of its compile time)."""
+    tiles = (W + tile_w - 1) // tile_w * H
+    first = take(taken) * RADIAL_RUN
+    if first >= tiles:  # before any allocation: most workers find no task left
+        return
+    buffers = (np.empty(tile_w), np.empty(tile_w), np.empty(tile_w), np.empty(tile_w, np.uint64),
+               np.empty(tile_w, np.uint64), np.empty((img.shape[2], tile_w)), np.empty(4 * tile_w))
+    while first < tiles:
+        _radial_run(img, H, W, loop, mode, tile_w, first, min(first + RADIAL_RUN, tiles), buffers, out)
         first = take(taken) * RADIAL_RUN
 
 
