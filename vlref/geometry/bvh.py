@@ -138,7 +138,7 @@ def _sort_by_key(idx, s, e, key):
         idx[s + k] = a[k]
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, entry=True)
 def _build(tmin, tmax, cent, max_leaf, pad):
     """Top-down build from per-triangle bounds and centroids (module docstring); returns the
     trimmed node arrays and the triangle order. Nodes are numbered in creation order, siblings adjacent."""
