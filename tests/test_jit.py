@@ -177,7 +177,7 @@ def test_a_render_compiles_each_function_with_the_wrapper_of_how_it_is_called():
     compiled = {name: d for name, d in dispatchers.items() if d.signatures}
     by_address = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
     entries = {"_build", "_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite"}
-    assert by_address | entries | {"task_counter", "_light_stage", "closest_hits"} <= set(compiled)
+    assert by_address | entries | {"task_counter"} <= set(compiled)
     for name, dispatcher in compiled.items():
         for sig in dispatcher.signatures:
             c_wrapper = bool(_entry(dispatcher, "llvm_cfunc_wrapper_name", sig))
