@@ -1,5 +1,5 @@
-"""Where a cold first render's compile goes, per compiled function (BENCHMARKS.md, "The cold first render's compile,
-function by function").
+"""Where a cold first render's compile goes, per compiled function (BENCHMARKS.md, "The cold first render: no Python
+entry for the helpers").
 
     python3 benchmarks/cold_profile.py one [JSON]          # the whole render in one process, nothing ahead
     python3 benchmarks/cold_profile.py real [JSON]         # as `vlref render` runs it: JSON and JSON.ahead-STAGE
@@ -11,8 +11,8 @@ Scene (a) at 320x180x64 with one spot (``vlref bench``'s ``first_render``). Ever
 public event API: one per function and signature compiled, nested where a caller's typing compiles its callees) is
 timed in process CPU seconds; a function's exclusive time is its event's less its nested events'. LLVM's share is
 read by wrapping Numba's ``CPUCodeLibrary`` phases (function passes, module passes, machine code) and attributed to
-the innermost compile. Prints a table (exclusive CPU, LLVM phases, the final module's size in IR lines) and writes
-every row to ``JSON`` when given.
+the innermost compile. Prints a table (exclusive CPU, LLVM phases, the final module's size in IR lines, Numba's
+inlining of ``inline="always"`` callees, its cache saves and look-ups) and writes every row to ``JSON`` when given.
 """
 
 import json
@@ -23,7 +23,7 @@ import tempfile
 import time
 from collections import defaultdict
 
-from numba.core import codegen, event, inline_closurecall
+from numba.core import caching, codegen, event, inline_closurecall
 
 _stack = []  # [key, start CPU, nested CPU]
 _rows = defaultdict(lambda: defaultdict(float))
@@ -73,6 +73,8 @@ def _install() -> None:
     _timed(codegen.CPUCodeLibrary, "_optimize_final_module", "llvm_module_passes_s", size=True)
     _timed(codegen.JITCodeLibrary, "_finalize_specific", "llvm_machine_code_s")
     _timed(inline_closurecall.InlineWorker, "run_untyped_passes", "inline_front_end_s", count=True)
+    _timed(caching.Cache, "save_overload", "cache_save_s")
+    _timed(caching.Cache, "load_overload", "cache_lookup_s")
 
 
 def _rows_and_sums(cpu: float, wall: float) -> dict:
@@ -133,9 +135,9 @@ def main(mode: str, *rest: str) -> None:
     cpu, wall = time.process_time() - start_cpu, time.perf_counter() - start
     rows = _rows_and_sums(cpu, wall)["rows"]
     columns = ("exclusive_s", "llvm_function_passes_s", "llvm_module_passes_s", "llvm_machine_code_s", "ir_lines",
-               "inline_front_end_s", "inline_front_end_calls")
+               "inline_front_end_s", "inline_front_end_calls", "cache_save_s", "cache_lookup_s")
     widths = {"exclusive_s": (9, 2), "ir_lines": (7, 0), "inline_front_end_calls": (7, 0)}
-    print(f"{'exclusive':>9} {'fpm':>6} {'mpm':>6} {'mc':>6} {'lines':>7} {'inline':>6} {'calls':>7}  function")
+    print(f"{'exclusive':>9} {'fpm':>6} {'mpm':>6} {'mc':>6} {'lines':>7} {'inline':>6} {'calls':>7} {'save':>6} {'look':>6}  function")
     for r in rows:
         cells = [format(r.get(c, 0), "{}.{}f".format(*widths.get(c, (6, 2)))) for c in columns]
         print(" ".join(cells), "", r["function"][:150])
