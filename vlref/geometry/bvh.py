@@ -202,7 +202,7 @@ def _build(tmin, tmax, cent, max_leaf, pad):
     return node_min[:used].copy(), node_max[:used].copy(), node_first[:used].copy(), node_count[:used].copy(), idx
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, entry=True)
 def _depth(node_first, node_count):
     if node_first.shape[0] == 0:
         return 0
