@@ -72,8 +72,10 @@ class CompiledCallersDispatcher(CPUDispatcher):
 
 def _compiled_callers(function, options: dict) -> CompiledCallersDispatcher:
     """``function`` compiled without wrappers: what ``numba.njit(function, cache=..., **options)`` makes (Numba's
-    ``jit``: ``nopython`` and ``boundscheck`` among the target options, the cache enabled on request), as a
-    :class:`CompiledCallersDispatcher`."""
+    ``jit``: ``nopython`` and ``boundscheck`` among the target options, the cache enabled on request; the function
+    itself under ``NUMBA_DISABLE_JIT``), as a :class:`CompiledCallersDispatcher`."""
+    if numba.config.DISABLE_JIT:
+        return function
     cache = options.pop("cache", False)
     dispatcher = CompiledCallersDispatcher(function, {}, dict(options, nopython=True, boundscheck=None,
                                                              no_cpython_wrapper=True, no_cfunc_wrapper=True))
