@@ -1,11 +1,15 @@
-"""vlref.jit.njit: Numba's njit with only the wrappers vlref calls. A function keeps its CPython wrapper (Python calls
-it) and has no C wrapper; a work function (``by_address=True``) has its C wrapper (vlref.parallel.work calls it
-through its address) and no CPython wrapper; the function's own optimised code is Numba's; every compiled function
-of vlref is made by it."""
+"""vlref.jit.njit: Numba's njit with only the wrappers vlref calls. A helper (compiled code calls it) has no wrapper,
+and a call from Python reaches it through its Python entry, a compile of its own under its own name and cache entry;
+an entry point (``entry=True`` or ``parallel=True``: Python calls it) keeps its CPython wrapper and has no C wrapper; a
+work function (``by_address=True``) has its C wrapper (vlref.parallel.work calls it through its address) and no
+CPython wrapper; the function's own optimised code is Numba's; every compiled function of vlref is made by it."""
 
 import ast
 import math
+import os
+import subprocess
 import sys
+import textwrap
 from pathlib import Path
 
 import numba
@@ -18,7 +22,7 @@ import vlref
 from vlref.phase import hg
 from vlref.render import render
 from vlref.scene import load_scene
-from vlref.jit import njit
+from vlref.jit import PYTHON_ENTRY_SUFFIX, CompiledCallersDispatcher, njit
 from vlref.parallel import COUNTER, WORKERS, take, task_counter, work
 
 
@@ -51,14 +55,76 @@ def _body(dispatcher):
     return str(result.library.get_function(name)).replace(name, "F")
 
 
-def test_a_function_has_its_python_entry_and_no_c_wrapper():
+def test_an_entry_point_has_its_python_wrapper_and_no_c_wrapper():
     cos_theta = np.linspace(-1.0, 1.0, 2001)
-    ours, numbas = njit(_phase_sum), numba.njit(_phase_sum)
+    ours, numbas = njit(_phase_sum, entry=True), numba.njit(_phase_sum)
     assert ours(cos_theta, 0.5) == numbas(cos_theta, 0.5)  # called from Python
     assert ours(cos_theta, 0.0) == pytest.approx(2001 / (4 * math.pi), rel=1e-12)  # isotropic: 1 / 4π each
     assert _entry(ours, "llvm_cpython_wrapper_name") and _entry(numbas, "llvm_cpython_wrapper_name")
     assert _entry(ours, "llvm_cfunc_wrapper_name") == 0 and _entry(numbas, "llvm_cfunc_wrapper_name") != 0
     assert _body(ours) == _body(numbas)  # the same code, only the wrapper left out
+    assert type(njit(_phase_sum, parallel=True)) is CPUDispatcher  # a parallel kernel is an entry point
+
+
+def test_a_helper_has_no_wrapper_and_python_calls_it_through_its_python_entry():
+    cos_theta = np.linspace(-1.0, 1.0, 2001)
+    ours, numbas = njit(_phase_sum), numba.njit(_phase_sum)
+    assert isinstance(ours, CompiledCallersDispatcher)
+    assert ours(cos_theta, 0.5) == numbas(cos_theta, 0.5)  # from Python: through the Python entry
+    assert ours.signatures == [] and len(ours.python_entry.signatures) == 1
+    assert ours.python_entry.py_func.__qualname__ == _phase_sum.__qualname__ + PYTHON_ENTRY_SUFFIX
+    assert _entry(ours.python_entry, "llvm_cpython_wrapper_name") != 0
+
+    @numba.njit
+    def caller(c, g):
+        return ours(c, g)
+
+    assert caller(cos_theta, 0.5) == numbas(cos_theta, 0.5)  # from compiled code: the helper's own compile
+    assert len(ours.signatures) == 1
+    assert _entry(ours, "llvm_cpython_wrapper_name") == 0 and _entry(ours, "llvm_cfunc_wrapper_name") == 0
+    assert _body(ours) == _body(numbas)  # the same code, no wrapper
+
+
+_CACHED_HELPER = """
+import sys
+import numba
+import numpy as np
+from vlref.jit import njit
+
+
+@njit(cache=True)
+def helper(a):
+    return a.sum() * 0.5
+
+
+@numba.njit
+def caller(a):
+    return helper(a)
+
+
+a = np.arange(10.0)
+print(caller(a) if sys.argv[1] == "compiled" else helper(a), len(helper.signatures))
+"""
+
+
+def test_a_python_call_never_finds_the_helpers_cache_entry_without_wrapper(tmp_path):
+    """Numba's cache keys an entry by signature and code only: a helper compiled for a compiled caller and cached
+    (no wrapper) must not be what a later process's Python call loads (it would be called through address 0)."""
+    (tmp_path / "cached_helper.py").write_text(textwrap.dedent(_CACHED_HELPER))
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
+               PYTHONPATH=os.pathsep.join([str(Path(vlref.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]))
+
+    def run(how):
+        proc = subprocess.run([sys.executable, str(tmp_path / "cached_helper.py"), how], env=env, capture_output=True,
+                              text=True, cwd=tmp_path)
+        assert proc.returncode == 0, proc.stderr[-2000:]
+        return proc.stdout.split()
+
+    assert run("compiled") == ["22.5", "1"]  # the helper compiled without wrapper, into the cache
+    assert run("python") == ["22.5", "0"]  # a fresh process: the Python entry, its own compile and cache entry
+    assert run("python") == ["22.5", "0"]  # its cache entry
+    indexes = sorted(p.name.split("-")[0] for p in (tmp_path / "cache").rglob("*.nbi"))
+    assert indexes == ["cached_helper.helper", "cached_helper.helper" + PYTHON_ENTRY_SUFFIX]
 
 
 def test_a_work_function_has_its_c_wrapper_and_no_python_entry():
@@ -101,18 +167,21 @@ def test_every_compiled_function_of_vlref_is_made_by_vlref_jit():
     assert not found
 
 
-def test_a_render_compiles_a_c_wrapper_for_the_work_functions_only():
-    """After a render of the default scene, every compiled function of vlref has its CPython entry point and no C
-    wrapper, but the work functions of the parallel kernels, which have their C wrapper and no CPython entry."""
+def test_a_render_compiles_each_function_with_the_wrapper_of_how_it_is_called():
+    """After a render of the default scene, every compiled function of vlref has no wrapper but the entry points,
+    the kernels Python calls (their CPython wrapper only), and the work functions of the parallel kernels (their C
+    wrapper only)."""
     render(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
-    compiled = {value.py_func.__qualname__: value for name, module in list(sys.modules.items())
-                if name.startswith("vlref.") for value in vars(module).values()
-                if isinstance(value, CPUDispatcher) and value.signatures}
+    dispatchers = {value.py_func.__qualname__: value for name, module in list(sys.modules.items())
+                   if name.startswith("vlref.") for value in vars(module).values() if isinstance(value, CPUDispatcher)}
+    compiled = {name: d for name, d in dispatchers.items() if d.signatures}
     by_address = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
-    assert by_address | {"_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite",
-                         "task_counter"} <= set(compiled)
+    entries = {"_build", "_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite"}
+    assert by_address | entries | {"task_counter"} <= set(compiled)
     for name, dispatcher in compiled.items():
         for sig in dispatcher.signatures:
             c_wrapper = bool(_entry(dispatcher, "llvm_cfunc_wrapper_name", sig))
             python_entry = bool(_entry(dispatcher, "llvm_cpython_wrapper_name", sig))
-            assert (c_wrapper, python_entry) == ((True, False) if name in by_address else (False, True)), name
+            expected = (True, False) if name in by_address else (False, name in entries)
+            assert (c_wrapper, python_entry) == expected, name
+            assert isinstance(dispatcher, CompiledCallersDispatcher) == (name not in entries | by_address), name

@@ -138,7 +138,7 @@ def _sort_by_key(idx, s, e, key):
         idx[s + k] = a[k]
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, entry=True)
 def _build(tmin, tmax, cent, max_leaf, pad):
     """Top-down build from per-triangle bounds and centroids (module docstring); returns the
     trimmed node arrays and the triangle order. Nodes are numbered in creation order, siblings adjacent."""
@@ -202,7 +202,7 @@ def _build(tmin, tmax, cent, max_leaf, pad):
     return node_min[:used].copy(), node_max[:used].copy(), node_first[:used].copy(), node_count[:used].copy(), idx
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, entry=True)
 def _depth(node_first, node_count):
     if node_first.shape[0] == 0:
         return 0

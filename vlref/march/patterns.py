@@ -44,7 +44,7 @@ def pixel_hash(x, y, seed):
     return float(w) / 4294967296.0
 
 
-@njit(cache=True, fastmath=False)
+@njit(cache=True, fastmath=False, entry=True)
 def _hash_offsets(width, height, seed):
     out = np.empty((height, width))
     for y in range(height):
