@@ -92,7 +92,7 @@ import numpy as np
 from vlref.jit import njit
 
 
-@njit(cache=True)
+@(numba.njit if sys.argv[2:] == ["plain"] else njit)(cache=True)  # plain: as a vlref that compiles every wrapper
 def helper(a):
     return a.sum() * 0.5
 
@@ -109,13 +109,14 @@ print(caller(a) if sys.argv[1] == "compiled" else helper(a), len(helper.signatur
 
 def test_a_python_call_never_finds_the_helpers_cache_entry_without_wrapper(tmp_path):
     """Numba's cache keys an entry by signature and code only: a helper compiled for a compiled caller and cached
-    (no wrapper) must not be what a later process's Python call loads (it would be called through address 0)."""
+    (no wrapper) must not be what a later process's Python call loads (it would be called through address 0), in
+    this version of vlref or in one that compiles every wrapper."""
     (tmp_path / "cached_helper.py").write_text(textwrap.dedent(_CACHED_HELPER))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=os.pathsep.join([str(Path(vlref.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]))
 
-    def run(how):
-        proc = subprocess.run([sys.executable, str(tmp_path / "cached_helper.py"), how], env=env, capture_output=True,
+    def run(*how):
+        proc = subprocess.run([sys.executable, str(tmp_path / "cached_helper.py"), *how], env=env, capture_output=True,
                               text=True, cwd=tmp_path)
         assert proc.returncode == 0, proc.stderr[-2000:]
         return proc.stdout.split()
@@ -125,6 +126,10 @@ def test_a_python_call_never_finds_the_helpers_cache_entry_without_wrapper(tmp_p
     assert run("python") == ["22.5", "0"]  # its cache entry
     indexes = sorted(p.name.split("-")[0] for p in (tmp_path / "cache").rglob("*.nbi"))
     assert indexes == ["cached_helper.helper", "cached_helper.helper" + PYTHON_ENTRY_SUFFIX]
+    # a version of vlref that compiles the helper with its wrappers (plain Numba), on the same unchanged source and
+    # cache, never loads the entry without them (vlref.jit.WithoutWrappersCache): it compiles its own and runs
+    assert run("python", "plain") == ["22.5", "1"]
+    assert run("compiled") == ["22.5", "1"]  # and this version still finds its own entry beside that one
 
 
 def test_a_work_function_has_its_c_wrapper_and_no_python_entry():
@@ -176,8 +181,9 @@ def test_a_render_compiles_each_function_with_the_wrapper_of_how_it_is_called():
                    if name.startswith("vlref.") for value in vars(module).values() if isinstance(value, CPUDispatcher)}
     compiled = {name: d for name, d in dispatchers.items() if d.signatures}
     by_address = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
-    entries = {"_build", "_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite"}
-    assert by_address | entries | {"task_counter"} <= set(compiled)
+    render_entries = {"_build", "_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite"}
+    entries = render_entries | {"_depth", "_hash_offsets"}  # also declared entry=True: compiled where a test ran first
+    assert by_address | render_entries | {"task_counter"} <= set(compiled)
     for name, dispatcher in compiled.items():
         for sig in dispatcher.signatures:
             c_wrapper = bool(_entry(dispatcher, "llvm_cfunc_wrapper_name", sig))

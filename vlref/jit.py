@@ -34,13 +34,25 @@ from __future__ import annotations
 import types
 
 import numba
-from numba.core.caching import NullCache
+from numba.core.caching import FunctionCache, NullCache
 from numba.core.registry import CPUDispatcher
 
-__all__ = ["njit", "CompiledCallersDispatcher", "PYTHON_ENTRY_SUFFIX"]
+__all__ = ["njit", "CompiledCallersDispatcher", "PYTHON_ENTRY_SUFFIX", "WithoutWrappersCache"]
 
 PYTHON_ENTRY_SUFFIX = "__from_python"
 """What the name of a helper's Python entry adds to the function's name (its cache files and symbols)."""
+
+
+class WithoutWrappersCache(FunctionCache):
+    """Numba's cache of a function compiled without wrappers: its index keys marked as such. Numba keys an entry by
+    signature, target and the function's bytecode, not by the wrappers compiled, and a module whose source did not
+    change keeps its cache files across versions of vlref: without the mark, a version that compiles the function
+    with its CPython wrapper would load this one's entry and call it from Python through address 0 (a crash), and
+    this version would load that one's entries, wrappers and all."""
+
+    def _index_key(self, sig, codegen):
+        sig, target, code = super()._index_key(sig, codegen)
+        return sig, target, code + ("without wrappers",)
 
 
 class CompiledCallersDispatcher(CPUDispatcher):
@@ -53,6 +65,9 @@ class CompiledCallersDispatcher(CPUDispatcher):
 
     def __call__(self, *args, **kwargs):
         return self.python_entry(*args, **kwargs)
+
+    def enable_caching(self):
+        self._cache = WithoutWrappersCache(self.py_func)
 
     @property
     def python_entry(self) -> CPUDispatcher:
