@@ -180,14 +180,20 @@ def test_a_render_compiles_each_function_with_the_wrapper_of_how_it_is_called():
     dispatchers = {value.py_func.__qualname__: value for name, module in list(sys.modules.items())
                    if name.startswith("vlref.") for value in vars(module).values() if isinstance(value, CPUDispatcher)}
     compiled = {name: d for name, d in dispatchers.items() if d.signatures}
-    by_address = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
+    render_work = {"_cast_rows", "_shade_rows", "_cast_chunks", "_march_tasks"}
     render_entries = {"_build", "_raycast_kernel", "_shade", "_cast_face", "_march_kernel", "_sum_composite"}
-    entries = render_entries | {"_depth", "_hash_offsets"}  # also declared entry=True: compiled where a test ran first
-    assert by_address | render_entries | {"task_counter"} <= set(compiled)
+    # what the process compiled besides (the tests run before this one) is checked by its declaration: a work function
+    # (by_address=True), an entry point (a parallel kernel, entry=True) or a helper (the rest)
+    by_address = {name for name, d in compiled.items() if d.targetoptions.get("no_cpython_wrapper")
+                  and not d.targetoptions.get("no_cfunc_wrapper")}
+    entries = {name for name, d in compiled.items()
+               if not isinstance(d, CompiledCallersDispatcher) and name not in by_address}
+    assert render_work <= by_address and render_entries <= entries and "task_counter" not in entries | by_address
+    assert all(name in entries for name, d in compiled.items() if d.targetoptions.get("parallel"))  # Python launches
+    assert render_work | render_entries | {"task_counter"} <= set(compiled)
     for name, dispatcher in compiled.items():
         for sig in dispatcher.signatures:
             c_wrapper = bool(_entry(dispatcher, "llvm_cfunc_wrapper_name", sig))
             python_entry = bool(_entry(dispatcher, "llvm_cpython_wrapper_name", sig))
             expected = (True, False) if name in by_address else (False, name in entries)
             assert (c_wrapper, python_entry) == expected, name
-            assert isinstance(dispatcher, CompiledCallersDispatcher) == (name not in entries | by_address), name

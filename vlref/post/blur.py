@@ -335,8 +335,8 @@ def _bilateral_rows(v, z, axis, g, code, factor, epsilon, r0, r1, scratch, out):
     """The rows of :func:`_bilateral_block`. ``scratch``: ``(T, rows, acc, wsum, flags)``, the depth tables, the planes,
     the sums (zeros: a fresh tap loads them and does not use them, :func:`_sums`) and :func:`_gaussian_weights`'
     marks, owned by the caller for the call and used here without reference counts
-    (:func:`~vlref.parallel.borrowed`): every tap of every stretch passes four of them to a function, and a counted
-    array costs each call an atomic add and an atomic subtract."""
+    (:func:`~vlref.parallel.borrowed`: every tap of every stretch passes four of them to a function, and a counted
+    array costs each such call an atomic add and subtract; :mod:`vlref.parallel`, "Calls that carry arrays")."""
     prefer_wide_vectors()
     T, rows, acc, wsum, flags = borrowed(scratch)
     H, W, C = v.shape

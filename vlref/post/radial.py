@@ -250,9 +250,9 @@ RADIAL_RUN = 16
 def _radial_run(img, H, W, loop, mode, tile_w, first, end, buffers, out):
     """Tiles ``first <= tile < end`` of :func:`_radial_tiles` (one task of :func:`_radial_tasks`). ``buffers``: ``(u,
     du, tx, ia, ib, acc, acc_rgb)``, the task's scratch, owned by the caller for the call and used here without
-    reference counts (:func:`~vlref.parallel.borrowed`): every tap passes four or five of them to
-    :func:`_tap_columns` and :func:`_tap_rows_rgb`, and a counted array costs each call an atomic add and an atomic
-    subtract (16 per tap and tile)."""
+    reference counts (:func:`~vlref.parallel.borrowed`: every tap passes four or five of them to :func:`_tap_columns`
+    and :func:`_tap_rows_rgb`, 16 atomic adds and subtracts per tap and tile if counted; :mod:`vlref.parallel`, "Calls
+    that carry arrays")."""
     u, du, tx, ia, ib, acc, acc_rgb = borrowed(buffers)
     lu, lv, scale, iterations, weight, tap_scale, decay, exposure, visibility = loop
     C = img.shape[2]
