@@ -15,6 +15,7 @@ import subprocess
 import sys
 import threading
 import time
+import weakref
 from pathlib import Path
 
 import numba
@@ -247,6 +248,28 @@ def test_a_signal_that_lands_in_a_finalizer_still_interrupts_the_command():
             del obj
             after.append("ran on")
     assert caught.value.signum == signal.SIGTERM and after == []
+
+
+@pytest.mark.parametrize("module, name", [("numba.core.types.abstract", "_on_type_disposal"), ("weakref", "__call__")])
+def test_a_signal_that_lands_in_a_weakref_callback_still_interrupts_the_command(module, name):
+    """A signal handled while a weakref callback runs (Numba's ``_on_type_disposal`` when one of its interned types
+    dies; :class:`weakref.finalize`) interrupts the command: raised in the frame that freed the object, not inside
+    the callback, where the interpreter would print "Exception ignored" and go on (a ``vlref golden verify`` under
+    SIGTERM once exited 0 so)."""
+    namespace = {"__name__": module, "os": os, "signal": signal}
+    exec(f"def {name}(ref):\n    os.kill(os.getpid(), signal.SIGTERM)\n    {name}.ran_on = True\n", namespace)
+
+    class Watched:
+        pass
+
+    after = []
+    with pytest.raises(Interrupted) as caught:
+        with _interruptible():
+            obj = Watched()
+            ref = weakref.ref(obj, namespace[name])
+            del obj
+            after.append("ran on")
+    assert caught.value.signum == signal.SIGTERM and after == [] and ref() is None
 
 
 def test_a_signal_that_lands_in_an_llvmlite_callback_still_interrupts_the_command():

@@ -134,14 +134,18 @@ def _callback_caller(frame):
     compiled code calls to box every array a kernel returns (it ignores the error and returns a result with
     an exception set: SystemError), imports (a C extension's initialisation turns any exception into
     ``ImportError: initialization failed``), finalizers (``__del__``: the interpreter prints "Exception
-    ignored in ..." and goes on, e.g. llvmlite's objects freed while Numba compiles) and llvmlite's Python code,
+    ignored in ..." and goes on, e.g. llvmlite's objects freed while Numba compiles), weakref callbacks (the same:
+    Numba's ``_on_type_disposal``, which forgets an interned type that dies, and :class:`weakref.finalize`'s) and
+    llvmlite's Python code,
     which LLVM calls back through ctypes while Numba compiles or loads a kernel (``_raw_object_cache_notify``:
     ctypes prints "Exception ignored on calling ctypes callback function" and goes on)."""
     caller, current = frame, frame
     while current is not None:
         name = current.f_globals.get("__name__") or ""
         if (current.f_code.co_name == "_numba_unpickle" and name == "numba.core.serialize") or \
-                name == "importlib._bootstrap" or name.startswith("llvmlite.") or current.f_code.co_name == "__del__":
+                name in ("importlib._bootstrap", "weakref") or name.startswith("llvmlite.") or \
+                current.f_code.co_name == "__del__" or \
+                (current.f_code.co_name == "_on_type_disposal" and name == "numba.core.types.abstract"):
             caller = current.f_back
         current = current.f_back
     return caller
