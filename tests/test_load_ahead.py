@@ -14,6 +14,10 @@ import numpy as np
 
 import vlref.ahead as ahead
 from vlref.bench import bench_scene
+from vlref.geometry import bvh
+from vlref.geometry.scene_geometry import build_geometry, builds_trees
+from vlref.scene import bundled_scenes, load_scene
+from vlref.scene.model import Box, Mesh, Plane
 
 LOADED = r"""
 import hashlib, json, sys, tempfile
@@ -71,8 +75,31 @@ def test_only_a_signature_the_cache_holds_alone_is_loaded_ahead(monkeypatch):
     monkeypatch.setattr(ahead, "_cached_signatures", signatures)
     scene = bench_scene(32, 18, 2, "one", 16)  # a spot with PCF maps: no shadow rays in the march
     chosen = ahead._to_load_ahead(scene, cold=["shadow maps"])
-    assert [f for f, _ in chosen] == [ahead._cast_rows, ahead._raycast_kernel, ahead._shade_rows, ahead._march_tasks,
+    assert [f for f, _ in chosen] == [ahead._build, ahead._cast_rows, ahead._raycast_kernel, ahead._shade_rows, ahead._march_tasks,
                                       ahead._march_kernel, ahead._sum_composite]
     assert dict(chosen)[ahead._march_kernel] == float64 + no_rays  # the scene's variant, of the three held
     radial = scene.replace(render=dataclasses.replace(scene.render, technique="radial"))
     assert ahead._to_load_ahead(radial, cold=[])[-1][0] is ahead._cast_face  # no march for another technique
+    planes = scene.replace(objects=tuple(o for o in scene.objects if isinstance(o, Plane)))
+    assert ahead._to_load_ahead(planes, cold=[])[0][0] is ahead._cast_rows  # no tree to build: the build not loaded
+
+
+def test_the_bvh_build_is_loaded_ahead_exactly_where_the_geometry_runs_it(monkeypatch):
+    calls = []
+    build = bvh._build
+    monkeypatch.setattr(bvh, "_build", lambda *args: calls.append(1) or build(*args))
+    scenes = {name: load_scene(path) for name, path in bundled_scenes().items()}
+    pillars, colonnade = scenes["pillars"], scenes["colonnade"]
+    planes = tuple(o for o in pillars.objects if isinstance(o, Plane))
+    box = next(o for o in pillars.objects if isinstance(o, Box))
+    glass = dataclasses.replace(box, material=dataclasses.replace(box.material, opacity=0.5))
+    scenes.update({"planes": pillars.replace(objects=planes), "none": pillars.replace(objects=()),
+                   "a transparent box": pillars.replace(objects=planes + (glass,)),
+                   "an opaque box": pillars.replace(objects=planes + (box,)),
+                   "a mesh": colonnade.replace(objects=tuple(o for o in colonnade.objects if isinstance(o, Mesh)))})
+    for name, scene in scenes.items():
+        calls.clear()
+        build_geometry(scene)
+        assert builds_trees(scene) == bool(calls), name
+    assert [name for name, scene in scenes.items() if not builds_trees(scene)] == ["planes", "none",
+                                                                                    "a transparent box"]

@@ -18,8 +18,8 @@ leaner compile", "Tiles, Estrin's `exp`, a tighter PCF loop" and "The frame arou
 A warm render's later stages are **loaded ahead on a thread** instead: Numba's load of a cached kernel is part
 Python (the index, unpickling, under the GIL) and part LLVM (parsing the library's bitcode, adding its object code,
 scanning its symbols: llvmlite's calls release the GIL; ~70 % of the 10 loads of a 1080p render on the dev box), so
-a thread that loads the ray cast's, the shading's, the shadow maps' and the march's functions in the order the render
-calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the camera's rays on
+a thread that loads the BVH build, the ray cast's, the shading's, the shadow maps' and the march's functions in the
+order the render calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the camera's rays on
 threads, the NumPy set-up of each stage); the main thread's call of a function being loaded waits for the load
 under Numba's compiler lock, as it would for its own load. Only a signature the cache holds alone is loaded (for the
 march's kernel: the one of the scene's precision and shadow-ray variant): a load ahead never adds work the render
@@ -42,7 +42,9 @@ import numpy as np
 
 from .camera import camera_from_settings
 from .geometry import GBuffer, build_geometry, raycast
+from .geometry.bvh import _build
 from .geometry.raycast import _cast_rows, _raycast_kernel
+from .geometry.scene_geometry import builds_trees
 from .jit_init import initialise_numba
 from .lights import pack_lights
 from .lights.shading import _shade, _shade_rows, scene_colour
@@ -171,8 +173,8 @@ def stage_cached(stage: str, scene) -> bool:
 
 
 def _stages_used(scene) -> dict[str, bool]:
-    """Which stages of :data:`AHEAD` a render of ``scene`` runs."""
-    return {"march": scene.render.technique == "physical",
+    """Which stages of :data:`AHEAD` and :data:`LOADED_AHEAD` a render of ``scene`` runs with their kernels."""
+    return {"geometry": builds_trees(scene), "march": scene.render.technique == "physical",
             "shadow maps": any(_mapped(light) for light in scene.lights), "raycast": True, "shading": True}
 
 
@@ -185,13 +187,18 @@ def _stages_ahead(scene) -> list[str]:
 
 LOADED_AHEAD: dict[str, tuple] = {
     # stage -> the compiled functions it calls that Numba loads from its cache, in the order the render calls them
+    "geometry": (_build,),
     "raycast": (_cast_rows, _raycast_kernel),
     "shading": (_shade_rows, _shade),
     "shadow maps": (_cast_chunks, _cast_face),
     "march": (_march_tasks, _march_kernel, _sum_composite),
 }
 """What :func:`compile_ahead` loads on a thread where the stage is cached: the kernel of :data:`AHEAD` with the
-functions it calls by address (:func:`vlref.parallel.work`), and for the march the composite of its buffers."""
+functions it calls by address (:func:`vlref.parallel.work`), and for the march the composite of its buffers. First of
+all the BVH build, the main thread's first kernel (no second process compiles it): the render calls it at once, while
+the thread still initialises Numba, and where the thread took the compiler lock first, the main thread's own load
+waited for the thread's next load as well; loaded first by the thread, it is there when the main thread gets the
+lock."""
 
 
 def _to_load_ahead(scene, cold: list[str]) -> list[tuple]:

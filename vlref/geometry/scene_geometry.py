@@ -68,7 +68,7 @@ from .obj import load_obj, transform_vertices
 from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
                          pack_plane, pack_sphere, triangle_normal)
 
-__all__ = ["GeoArrays", "Geometry", "build_geometry", "closest_hit", "closest_hits", "shadow_transmittance",
+__all__ = ["GeoArrays", "Geometry", "build_geometry", "builds_trees", "closest_hit", "closest_hits", "shadow_transmittance",
            "inline_shadow_transmittance", "trace_distances", "SHADOW_EPS", "RAY_CHUNK", "OPAQUE_ONLY",
            "EVERY_SURFACE"]
 
@@ -141,6 +141,13 @@ def _primitive(obj) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
     axis = row[3:12].reshape(3, 3)[:, 1]
     ext = np.abs(axis) * row[13] + obj.radius * np.sqrt(np.maximum(0.0, 1.0 - axis * axis))
     return CYLINDER, row, row[0:3] - ext, row[0:3] + ext
+
+
+def builds_trees(scene: Scene) -> bool:
+    """Whether :func:`build_geometry` runs the BVH build's kernel for ``scene``: a mesh (its triangles' tree; a mesh
+    has at least one face) or an opaque primitive other than a plane (the primitive tree's members)."""
+    return any(isinstance(obj, Mesh) or (not isinstance(obj, Plane) and obj.material.opacity >= 1.0)
+               for obj in scene.objects)
 
 
 def build_geometry(scene: Scene) -> Geometry:
