@@ -14,7 +14,7 @@ from vlref.camera import Camera
 from vlref.cli.commands import command
 from vlref.render import render
 
-WRAPPED = {"vlref.geometry.raycast": ("_raycast_kernel", "_per_object"), "vlref.lights.shading": ("_shade",),
+WRAPPED = {"vlref.geometry.raycast": ("_raycast_kernel", "per_object"), "vlref.lights.shading": ("_shade",),
            "vlref.lights.shadow_cast": ("_cast_face",),
            "vlref.techniques.physical": ("march_physical", "sum_and_composite", "offsets")}
 

@@ -12,7 +12,7 @@ import numpy as np
 from vlref import row_blocks
 from vlref.bench.config import bench_scene, median_time
 from vlref.camera import camera_from_settings, pixel_rays
-from vlref.geometry.raycast import _per_object
+from vlref.geometry.raycast import per_object
 
 
 def main() -> None:
@@ -35,7 +35,7 @@ def main() -> None:
     row_blocks.MAX_BLOCK_ROWS = default
     out["directions_one_thread_s"] = median_time(lambda: pixel_rays(camera, 1920, 1080, threads=1), 7)
     out["albedo_fancy_index_s"] = median_time(lambda: np.concatenate([table, np.zeros((1, 3))])[ids], 7)
-    out["albedo_take_blocks_s"] = median_time(lambda: _per_object(table, ids), 7)
+    out["albedo_take_blocks_s"] = median_time(lambda: per_object(table, ids), 7)
     print(json.dumps(out))
 
 

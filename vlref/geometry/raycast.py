@@ -49,7 +49,7 @@ from ..scene.model import Scene
 from .bvh import traversal_stack
 from .scene_geometry import OPAQUE_ONLY, GeoArrays, Geometry, build_geometry, closest_hits
 
-__all__ = ["GBuffer", "raycast", "kernel_args", "tree_spans", "without_tree"]
+__all__ = ["GBuffer", "raycast", "kernel_args", "per_object", "tree_spans", "without_tree"]
 
 
 @dataclass(frozen=True)
@@ -83,15 +83,15 @@ class GBuffer:
     @cached_property
     def albedo(self) -> np.ndarray:
         """(H, W, 3) the seen object's albedo, 0 on sky."""
-        return _per_object(self.object_albedo, self.object_id)
+        return per_object(self.object_albedo, self.object_id)
 
     @cached_property
     def emission(self) -> np.ndarray:
         """(H, W, 3) the seen object's emission, 0 on sky."""
-        return _per_object(self.object_emission, self.object_id)
+        return per_object(self.object_emission, self.object_id)
 
 
-def _per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
+def per_object(table: np.ndarray, object_id: np.ndarray) -> np.ndarray:
     """(H, W, 3): row ``object_id`` of the (M, 3) ``table`` per pixel, 0 where ``object_id`` is -1 (the appended
     zero row, as NumPy's indexing takes index -1); ``np.take`` on blocks of rows on threads
     (:func:`vlref.row_blocks.in_row_blocks`): copies of the table's values, so the bits of ``table[object_id]``."""
