@@ -26,7 +26,7 @@ from ..errors import InputError
 from ..processes import host_cores
 from .files import atomic_write, require_file
 
-__all__ = ["write_exr", "read_exr", "default_channel_names", "channel_dict", "exr_order"]
+__all__ = ["write_exr", "read_exr", "default_channel_names", "checked_channels", "channel_dict", "exr_order"]
 
 # Attributes every EXR header carries; user metadata may not reuse these names.
 _EXR_STANDARD = frozenset({
@@ -44,8 +44,8 @@ def default_channel_names(count: int) -> tuple[str, ...]:
     return names[count]
 
 
-def _as_float32(name: str, array: np.ndarray) -> np.ndarray:
-    """A 2-D channel as contiguous float32; integers must be exact in float32 (|v| <= 2**24)."""
+def _checked(name: str, array: np.ndarray) -> np.ndarray:
+    """A 2-D channel that float32 holds (``array`` itself): floats, or integers exact in float32 (|v| <= 2**24)."""
     a = np.asarray(array)
     if a.ndim != 2 or a.size == 0:
         raise ValueError(f"channel {name!r}: expected a non-empty (H, W) array, got shape {a.shape}")
@@ -54,12 +54,13 @@ def _as_float32(name: str, array: np.ndarray) -> np.ndarray:
             raise ValueError(f"channel {name!r}: integers beyond 2**24 are not exact in float32")
     elif a.dtype.kind != "f":
         raise ValueError(f"channel {name!r}: cannot store dtype {a.dtype} as float32")
-    return np.ascontiguousarray(a, dtype=np.float32)
+    return a
 
 
-def channel_dict(image_or_channels, channels: Sequence[str] | str | None) -> dict[str, np.ndarray]:
-    """``{name: (H, W) float32}`` of an array (names: ``channels`` or :func:`default_channel_names`) or of a
-    dict of channels; ValueError for bad shapes, dtypes or names."""
+def checked_channels(image_or_channels, channels: Sequence[str] | str | None) -> dict[str, np.ndarray]:
+    """``{name: (H, W) array}`` of an array (names: ``channels`` or :func:`default_channel_names`) or of a dict of
+    channels, each one that float32 holds, not yet converted (views of the given arrays); ValueError for bad shapes,
+    dtypes or names."""
     if isinstance(image_or_channels, Mapping):
         if channels is not None:
             raise ValueError("channel names come from the dict's keys; do not pass channels=")
@@ -80,11 +81,18 @@ def channel_dict(image_or_channels, channels: Sequence[str] | str | None) -> dic
         raise ValueError("no channels to write")
     if len({n for n, _ in items}) != len(items):
         raise ValueError("duplicate channel names")
-    out = {str(n): _as_float32(str(n), v) for n, v in items}
+    out = {str(n): _checked(str(n), v) for n, v in items}
     shapes = {v.shape for v in out.values()}
     if len(shapes) != 1:
         raise ValueError(f"channels differ in shape: {sorted(shapes)}")
     return out
+
+
+def channel_dict(image_or_channels, channels: Sequence[str] | str | None) -> dict[str, np.ndarray]:
+    """``{name: (H, W) float32}`` (contiguous) of the channels :func:`checked_channels` takes; ValueError for bad
+    shapes, dtypes or names."""
+    return {name: np.ascontiguousarray(a, dtype=np.float32)
+            for name, a in checked_channels(image_or_channels, channels).items()}
 
 
 @functools.cache

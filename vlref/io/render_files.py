@@ -10,7 +10,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..processes import host_cores
-from .exr import channel_dict, write_exr
+from .exr import channel_dict, checked_channels, write_exr
 from .png import write_png
 
 __all__ = ["save_buffers", "save_render"]
@@ -26,8 +26,9 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
     Every buffer is validated (name, shape, dtype) before the first file is written, and each file is
     written atomically; wrap the call in :func:`vlref.io.output_folders.output_dir` for an all-or-nothing set.
     The buffers named in ``half`` are stored as half floats (:func:`vlref.io.exr.write_exr`). The float32
-    channels of all buffers are made on a thread per buffer (NumPy's casts release the GIL), then the files are
-    written one after another (each compressed on OpenEXR's thread pool).
+    channels of all buffers are made on a thread per buffer (NumPy's casts release the GIL) while the files are
+    written one after another, each as soon as its channels are made (each compressed on OpenEXR's thread pool): the
+    first file's compression no longer waits for the other buffers' channels.
     """
     out_dir = Path(out_dir)
     for name, array in buffers.items():
@@ -35,10 +36,11 @@ def save_buffers(out_dir, buffers: Mapping[str, np.ndarray], metadata: Mapping[s
             raise ValueError(f"buffer name {name!r} is not a safe file name")
         if name in half and np.asarray(array).dtype.kind != "f":
             raise ValueError(f"buffer {name!r}: integer buffers stay float32 (half asked)")
+    checked = [checked_channels(array, None) for array in buffers.values()]
     with concurrent.futures.ThreadPoolExecutor(max(1, min(len(buffers), host_cores()))) as pool:
-        channels = list(pool.map(lambda array: channel_dict(array, None), buffers.values()))
-    return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
-            for name, data in zip(buffers, channels)]
+        channels = pool.map(lambda data: channel_dict(data, None), checked)  # in order, as each is made
+        return [write_exr(out_dir / f"{name}.exr", data, metadata=metadata, half=name in half)
+                for name, data in zip(buffers, channels)]
 
 
 def save_render(out_dir, result, stages: bool, main: Sequence[str], exposure: float = 1.0,
