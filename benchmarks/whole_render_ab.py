@@ -9,7 +9,7 @@ whose kernel files differ, where one cache cannot serve both.
 2. ``PAIRS`` rounds of A, B, B, A: each run is the tree's own ``vlref.bench.renders.bench_whole_render`` with one
    repeat (a fresh process that imports what ``vlref render`` imports, renders (b), writes its default outputs
    and ends as the program ends), started from a parent process of that tree (the parent's own start is not
-   timed); the process wall time and its split.
+   timed); the process wall time and its split, with ``rest``: the process wall less the split's parts.
 3. The buffers of (b) at 1080p x 64 of each tree (every buffer of the render, the per-light buffers included)
    and the files ``vlref render`` writes, hashed.
 
@@ -81,6 +81,9 @@ def main(out_dir: str, pairs: int, a: str, b: str, cache_root: str = "/tmp/wrab"
 
     def run(label: str) -> None:
         whole = json.loads(py(label, ONE, check=True).stdout.strip().splitlines()[-1])
+        # what the process spent outside every part of the split (the bench's scene unpickled, the render's set-up
+        # before its first stage and its result after its last, the child's output folder removed)
+        whole["split"]["rest"] = whole["seconds"] - sum(whole["split"].values())
         report["runs"][label].append(whole)
         print(label, f"{whole['seconds']:.3f} s;", ", ".join(f"{k} {v:.3f}" for k, v in whole["split"].items()),
               flush=True)
