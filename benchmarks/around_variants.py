@@ -6,8 +6,8 @@ written as its channels are made"): what each bought, on one machine.
 
 Variants: ``all`` (the tree), ``geometry`` (the BVH build not loaded ahead first: ``LOADED_AHEAD`` without it),
 ``write`` (the float32 channels of every buffer made before the first file, as before), ``albedo`` (the albedo made
-by the render, as before). The cache is filled by a cold render of (b) at 320x180 first, then one 1080p run is
-dropped; ``ROUNDS`` rounds of all, geometry, write, albedo, albedo, write, geometry, all. Each run is a fresh process
+by the render, as before), ``colorama`` (imported, as Numba's import did). The cache is filled by a cold render of (b) at 320x180 first, then one 1080p run is
+dropped; ``ROUNDS`` rounds of the variants in order and in reverse. Each run is a fresh process
 that imports what ``vlref render`` imports, renders (b) with ``render_to_folder`` into a folder that the parent
 removes after the process ended, and ends with ``exit_at_once``; its split as ``bench_whole_render``'s, with
 ``rest`` (the process wall less the split's parts). Writes ``OUT_DIR/around_variants.json``.
@@ -25,6 +25,8 @@ from pathlib import Path
 CHILD = """
 import concurrent.futures, json, pickle, sys, time
 t0 = time.perf_counter()
+if sys.argv[2] == "colorama":
+    import colorama  # imported, as Numba's import imported it before
 from vlref.cli.commands import exit_at_once, program_command
 render_to_folder = program_command("render").render_to_folder
 t1 = time.perf_counter()
@@ -50,7 +52,7 @@ print(json.dumps({"import_s": t1 - t0, "stages": result.timings, "write_s": writ
 exit_at_once(0)
 """
 
-VARIANTS = ("all", "geometry", "write", "albedo")
+VARIANTS = ("all", "geometry", "write", "albedo", "colorama")
 SIZE = tuple(int(v) for v in os.environ.get("AROUND_SIZE", "1920x1080").split("x"))
 
 

@@ -2,10 +2,12 @@
 unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
 works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
 initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
-``.numba_config.yaml`` to read; other processes as always. Each case runs in a fresh interpreter (the
+``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, and without colorama; other processes as
+always. Each case runs in a fresh interpreter (the
 initialisation happens once a process)."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -174,8 +176,6 @@ print(json.dumps(state))
 
 
 def test_the_render_program_imports_numba_without_coverage_unless_a_measurement_runs(tmp_path):
-    import os
-
     package = tmp_path / "site" / "coverage"  # a stand-in for coverage.py, installed for these processes: the names
     package.mkdir(parents=True)               # Numba's coverage support reads
     (package / "__init__.py").write_text("from . import types\n\n\nclass Coverage:\n    @staticmethod\n"
@@ -194,6 +194,36 @@ def test_the_render_program_imports_numba_without_coverage_unless_a_measurement_
     measured = {"coverage imported": True, "numba reports to coverage": True, "coverage works": True}
     assert state("render", "measured") == measured
     assert state("scenes", "not measured") == measured  # another command: Numba's import as always
+
+
+WITH_COLORAMA_INSTALLED = r"""
+import json, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import numba.core.errors as errors
+state = {"colorama imported": "colorama" in sys.modules, "numba highlights": not hasattr(errors, "NOPColorScheme")}
+import colorama  # a complete import afterwards
+state["colorama works"] = colorama.Fore.RED == "red"
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_numba_without_colorama(tmp_path):
+    package = tmp_path / "site" / "colorama"  # a stand-in for colorama, installed for these processes: the names
+    package.mkdir(parents=True)               # Numba's error module reads
+    (package / "__init__.py").write_text("__version__ = '0.4.6'\n\n\ndef init():\n    pass\n\n\nreinit = deinit = init\n\n\n"
+                                         "class Names:\n    def __getattr__(self, name):\n        return name.lower()\n\n\n"
+                                         "Fore = Style = Names()\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path / "site"),
+                                                                    os.environ.get("PYTHONPATH")])))
+
+    def state(command):
+        proc = subprocess.run([sys.executable, "-c", WITH_COLORAMA_INSTALLED, command], capture_output=True, text=True,
+                              check=True, env=env)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+
+    assert state("render") == {"colorama imported": False, "numba highlights": False, "colorama works": True}
+    assert state("scenes") == {"colorama imported": True, "numba highlights": True, "colorama works": True}
 
 
 AHEAD_PROCESS = r"""
