@@ -1,6 +1,6 @@
 """The whole ``vlref render`` of (b) at 1920x1080x64 in fresh processes of one tree, with each of this round's
-changes switched off in turn (BENCHMARKS.md, "The BVH build loaded first, the albedo on demand, each EXR file
-written as its channels are made"): what each bought, on one machine.
+changes switched off in turn (BENCHMARKS.md, "Around the march: the BVH build loaded first, the albedo on demand,
+each EXR file written as its channels are made, Numba without colorama"): what each bought, on one machine.
 
     python3 benchmarks/around_variants.py OUT_DIR ROUNDS [CACHE_DIR]
 
