@@ -6,11 +6,12 @@ each EXR file written as its channels are made, Numba without colorama"): what e
 
 Variants: ``all`` (the tree), ``geometry`` (the BVH build not loaded ahead first: ``LOADED_AHEAD`` without it),
 ``write`` (the float32 channels of every buffer made before the first file, as before), ``albedo`` (the albedo made
-by the render, as before), ``colorama`` (imported, as Numba's import did). The cache is filled by a cold render of (b) at 320x180 first, then one 1080p run is
-dropped; ``ROUNDS`` rounds of the variants in order and in reverse. Each run is a fresh process
-that imports what ``vlref render`` imports, renders (b) with ``render_to_folder`` into a folder that the parent
-removes after the process ended, and ends with ``exit_at_once``; its split as ``bench_whole_render``'s, with
-``rest`` (the process wall less the split's parts). Writes ``OUT_DIR/around_variants.json``.
+by the render, as before), ``colorama`` (imported, as Numba's import did). The cache is filled by a cold render of
+(b) at 320x180 first, then one 1080p run is dropped; ``ROUNDS`` rounds of the variants in order and in reverse. Each
+run is a fresh process that imports what ``vlref render`` imports, renders (b) with ``render_to_folder`` into a
+folder that the parent removes after the process ended, and ends with ``exit_at_once``; its split as
+``bench_whole_render``'s, with ``rest`` (the process wall less the split's parts). Writes
+``OUT_DIR/around_variants.json``.
 """
 
 import json

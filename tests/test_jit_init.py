@@ -211,8 +211,9 @@ print(json.dumps(state))
 def test_the_render_program_imports_numba_without_colorama(tmp_path):
     package = tmp_path / "site" / "colorama"  # a stand-in for colorama, installed for these processes: the names
     package.mkdir(parents=True)               # Numba's error module reads
-    (package / "__init__.py").write_text("__version__ = '0.4.6'\n\n\ndef init():\n    pass\n\n\nreinit = deinit = init\n\n\n"
-                                         "class Names:\n    def __getattr__(self, name):\n        return name.lower()\n\n\n"
+    (package / "__init__.py").write_text("__version__ = '0.4.6'\n\n\ndef init():\n    pass\n\n\n"
+                                         "reinit = deinit = init\n\n\nclass Names:\n"
+                                         "    def __getattr__(self, name):\n        return name.lower()\n\n\n"
                                          "Fore = Style = Names()\n")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path / "site"),
                                                                     os.environ.get("PYTHONPATH")])))

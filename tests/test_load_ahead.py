@@ -75,8 +75,8 @@ def test_only_a_signature_the_cache_holds_alone_is_loaded_ahead(monkeypatch):
     monkeypatch.setattr(ahead, "_cached_signatures", signatures)
     scene = bench_scene(32, 18, 2, "one", 16)  # a spot with PCF maps: no shadow rays in the march
     chosen = ahead._to_load_ahead(scene, cold=["shadow maps"])
-    assert [f for f, _ in chosen] == [ahead._build, ahead._cast_rows, ahead._raycast_kernel, ahead._shade_rows, ahead._march_tasks,
-                                      ahead._march_kernel, ahead._sum_composite]
+    assert [f for f, _ in chosen] == [ahead._build, ahead._cast_rows, ahead._raycast_kernel, ahead._shade_rows,
+                                      ahead._march_tasks, ahead._march_kernel, ahead._sum_composite]
     assert dict(chosen)[ahead._march_kernel] == float64 + no_rays  # the scene's variant, of the three held
     radial = scene.replace(render=dataclasses.replace(scene.render, technique="radial"))
     assert ahead._to_load_ahead(radial, cold=[])[-1][0] is ahead._cast_face  # no march for another technique

@@ -19,11 +19,11 @@ A warm render's later stages are **loaded ahead on a thread** instead: Numba's l
 Python (the index, unpickling, under the GIL) and part LLVM (parsing the library's bitcode, adding its object code,
 scanning its symbols: llvmlite's calls release the GIL; ~70 % of the 10 loads of a 1080p render on the dev box), so
 a thread that loads the BVH build, the ray cast's, the shading's, the shadow maps' and the march's functions in the
-order the render calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the camera's rays on
-threads, the NumPy set-up of each stage); the main thread's call of a function being loaded waits for the load
-under Numba's compiler lock, as it would for its own load. Only a signature the cache holds alone is loaded (for the
-march's kernel: the one of the scene's precision and shadow-ray variant): a load ahead never adds work the render
-would not do.
+order the render calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the
+camera's rays on threads, the NumPy set-up of each stage); the main thread's call of a function being loaded waits
+for the load under Numba's compiler lock, as it would for its own load. Only a signature the cache holds alone is
+loaded (for the march's kernel: the one of the scene's precision and shadow-ray variant): a load ahead never adds
+work the render would not do.
 
 It imports only what a render imports anyway: ``vlref render`` imports it, and not :mod:`vlref.warmup`, which
 also imports the quadrature reference.

@@ -68,9 +68,9 @@ from .obj import load_obj, transform_vertices
 from .primitives import (BOX, CYLINDER, PLANE, ROW, SPHERE, hit_primitive, pack_box, pack_cylinder,
                          pack_plane, pack_sphere, triangle_normal)
 
-__all__ = ["GeoArrays", "Geometry", "build_geometry", "builds_trees", "closest_hit", "closest_hits", "shadow_transmittance",
-           "inline_shadow_transmittance", "trace_distances", "SHADOW_EPS", "RAY_CHUNK", "OPAQUE_ONLY",
-           "EVERY_SURFACE"]
+__all__ = ["GeoArrays", "Geometry", "build_geometry", "builds_trees", "closest_hit", "closest_hits",
+           "shadow_transmittance", "inline_shadow_transmittance", "trace_distances", "SHADOW_EPS", "RAY_CHUNK",
+           "OPAQUE_ONLY", "EVERY_SURFACE"]
 
 SHADOW_EPS = 1e-6
 """Shadow rays ignore hits closer than this many metres to their origin (self-intersection)."""
