@@ -301,6 +301,23 @@ def test_blur_hv_runs_horizontal_then_vertical():
     assert (hv == thesis_blur_pass(h, z, 0)).all()
 
 
+def test_blur_hv_into_its_own_input_gives_the_same_buffers():
+    # the vertical pass may write into the values themselves (read by the horizontal pass before): the same bits as
+    # two new arrays, hv in the caller's memory; an out= that overlaps what a pass reads, or of another shape, is
+    # refused before anything is written
+    rng = np.random.default_rng(12)
+    v, z = image(rng, 19, 23, 3), depth_image(rng, 19, 23)
+    h, hv = blur_hv(thesis_blur_pass, v, z)
+    own = v.copy()
+    h2, hv2 = blur_hv(thesis_blur_pass, own, z, out=own)
+    assert np.array_equal(h, h2) and np.array_equal(hv, hv2) and np.shares_memory(hv2, own)
+    for bad in (v, v[:, :-1].copy(), v.astype(np.float32), np.asfortranarray(v)):
+        kept = bad.copy()
+        with pytest.raises(ValueError, match="out"):
+            thesis_blur_pass(v, z, 1, out=bad)
+        assert np.array_equal(bad, kept)
+
+
 def test_sky_depth_and_zero_factor_stay_finite():
     rng = np.random.default_rng(9)
     v, z = image(rng, 6, 7, 3), depth_image(rng, 6, 7)
