@@ -5,8 +5,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from vlref.camera import (Camera, cross, euler_matrix, linear_to_raw, look_rotation, pixel_rays, raw_to_linear,
-                          unity_linear_eye_depth, zbuffer_params)
+from vlref.camera import (Camera, _length, cross, euler_matrix, linear_to_raw, look_rotation, pixel_rays,
+                          raw_to_linear, unity_linear_eye_depth, zbuffer_params)
 from vlref.row_blocks import MAX_BLOCK_ROWS
 
 near_far = st.tuples(st.floats(0.01, 10.0), st.floats(1.5, 1e4)).map(lambda nf: (nf[0], nf[0] * nf[1]))
@@ -44,6 +44,13 @@ def test_cross_has_the_bits_of_numpys_cross():
             b = rng.normal(size=shape) * 10.0 ** rng.uniform(-8, 8)
             assert cross(a, b).tobytes() == np.cross(a, b).tobytes(), shape
     assert cross((1, 0, 0), (0, 1, 0)).tolist() == [0.0, 0.0, 1.0]  # tuples of ints, like NumPy's
+
+
+def test_length_has_the_bits_of_numpys_norm():
+    rng = np.random.default_rng(12)
+    for _ in range(2000):
+        v = rng.normal(size=3) * 10.0 ** rng.uniform(-150, 150)
+        assert np.float64(_length(v)).tobytes() == np.linalg.norm(v).tobytes()
 
 
 def test_view_matrix_puts_the_camera_at_origin_looking_down_plus_z():

@@ -165,6 +165,8 @@ def test_work_called_by_address_does_the_same_and_is_not_linked_into_the_kernel(
     assert work(_count_tasks, COUNTER, 5000, np.zeros(3, dtype=np.int32)) is not count_tasks
     (signature,) = _count_by_address.signatures
     assert isinstance(signature[-1], types.FunctionType)
+    # typed by the type made with the work (vlref.parallel._typeof_work), Numba's own rule's type, not a new one
+    assert numba.typeof(count_tasks) is signature[-1] is types.FunctionType(count_tasks.signature())
     assert "_count_tasks" in _count_linked.inspect_llvm(_count_linked.signatures[0])
     assert "_count_tasks" not in _count_by_address.inspect_llvm(signature)
 

@@ -96,6 +96,20 @@ def test_bilateral_pass_same_bits_as_the_pixel_loop(shape):
                 assert np.array_equal(got, int_offset_reference(v, z, axis, g, weight)), (K, kind, factor, axis)
 
 
+@pytest.mark.parametrize("C", [3, 4])
+def test_bilateral_pass_within_an_ulp_of_the_pixel_loop_near_zero(C):
+    # one division per texel and a corrected product per channel (vlref.numeric.quotient): the division's bits
+    # (above), and within an ulp of them for values within 2^-969 of 0 (subnormal results included); RGB and 4
+    # channels end their stretches in loops of their own
+    rng = np.random.default_rng(C)
+    v, z = np.ldexp(image(rng, 12, 300, C), rng.integers(-1050, -960, (12, 300, C))), depth_image(rng, 12, 300)
+    g = gaussian_weights(3, 2.0)
+    for axis in (0, 1):
+        got, ref = bilateral_pass(v, z, axis, g, 0.7), int_offset_reference(v, z, axis, g, WEIGHT_KINDS[0][2])
+        apart = np.abs(got.view(np.int64) - ref.view(np.int64))
+        assert apart.max() <= 1 and (got < 2.0**-1022).any(), axis
+
+
 def test_bilateral_pass_independent_of_the_blocks():
     # the vertical pass recomputes the depth weights of the K rows above each block: any blocking, same bits
     rng = np.random.default_rng(8)
@@ -285,6 +299,23 @@ def test_blur_hv_runs_horizontal_then_vertical():
     h, hv = blur_hv(thesis_blur_pass, v, z)
     assert (h == thesis_blur_pass(v, z, 1)).all()
     assert (hv == thesis_blur_pass(h, z, 0)).all()
+
+
+def test_blur_hv_into_its_own_input_gives_the_same_buffers():
+    # the vertical pass may write into the values themselves (read by the horizontal pass before): the same bits as
+    # two new arrays, hv in the caller's memory; an out= that overlaps what a pass reads, or of another shape, is
+    # refused before anything is written
+    rng = np.random.default_rng(12)
+    v, z = image(rng, 19, 23, 3), depth_image(rng, 19, 23)
+    h, hv = blur_hv(thesis_blur_pass, v, z)
+    own = v.copy()
+    h2, hv2 = blur_hv(thesis_blur_pass, own, z, out=own)
+    assert np.array_equal(h, h2) and np.array_equal(hv, hv2) and np.shares_memory(hv2, own)
+    for bad in (v, v[:, :-1].copy(), v.astype(np.float32), np.asfortranarray(v)):
+        kept = bad.copy()
+        with pytest.raises(ValueError, match="out"):
+            thesis_blur_pass(v, z, 1, out=bad)
+        assert np.array_equal(bad, kept)
 
 
 def test_sky_depth_and_zero_factor_stay_finite():

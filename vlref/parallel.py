@@ -61,6 +61,7 @@ from numba.core import cgutils, types
 from numba.core.errors import TypingError
 from numba.core.types.function_type import WrapperAddressProtocol
 from numba.core.typing import signature
+from numba.core.typing.typeof import typeof_impl
 from numba.extending import intrinsic
 
 from .jit import njit
@@ -142,10 +143,12 @@ def borrowed(typingctx, value):
 
 class Work(WrapperAddressProtocol):
     """A compiled function passed to a parallel kernel by address (module docstring): Numba types it as a
-    first-class function of ``sig``; the kernel calls it through the address of its C wrapper."""
+    first-class function of ``sig`` (the type made once, :func:`_typeof_work`); the kernel calls it through the
+    address of its C wrapper."""
 
     def __init__(self, function, sig):
         self._sig = sig
+        self.numba_type = types.FunctionType(sig)
         result = function.get_compile_result(sig)  # compiles or loads from the cache now, not while unboxing
         self._address = result.library.get_pointer_to_function(result.fndesc.llvm_cfunc_wrapper_name)
         if not self._address:  # a call through it would jump to address 0
@@ -157,6 +160,14 @@ class Work(WrapperAddressProtocol):
 
     def signature(self):
         return self._sig
+
+
+@typeof_impl.register(Work)
+def _typeof_work(value, context):
+    """A :class:`Work`'s Numba type, made when the work was: Numba's own rule for a function by address
+    (``typeof_function_type``, registered for any :class:`WrapperAddressProtocol`) makes the same ``FunctionType``
+    anew at every kernel call, ~8 µs of the call (dev box), 9 of a 66 µs ray-cast launch at 80x45 on one thread."""
+    return value.numba_type
 
 
 _WORK: dict = {}

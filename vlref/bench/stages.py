@@ -47,19 +47,23 @@ def bench_geometry(cfg: BenchConfig) -> tuple[dict, dict]:
 
 def post_passes(h: int, w: int) -> dict:
     """Each post pass at ``w x h`` as a call without arguments, on fixed inputs (``default_rng(0)``; half-resolution
-    inputs where the pass takes them): what :func:`bench_post` times and benchmarks/post_ab.py compares."""
+    inputs where the pass takes them): what :func:`bench_post` times and benchmarks/post_ab.py compares.
+    ``bilateral_blur_hv_into``: the blur as the Killzone technique calls it, the vertical pass into a buffer the
+    caller owns (its pages mapped by the previous call; ``bilateral_blur_hv``: two new arrays)."""
     rng = np.random.default_rng(0)
     depth = rng.uniform(1.0, 30.0, size=(h, w))
     depth_lo = downsample_min(depth, "half")
     lo = rng.random(depth_lo.shape + (3,))
     full = rng.random((h, w, 3))
     trans = rng.random((h, w))
+    spare = np.empty_like(full)
     return {
         "downsample_min_half": lambda: downsample_min(depth, "half"),
         "thesis_upsample": lambda: thesis_upsample(lo, depth_lo, depth),
         "vl_upsample": lambda: vl_upsample(lo, depth_lo, depth),
         "urp_upsample": lambda: urp_upsample(lo, depth_lo, depth),
         "bilateral_blur_hv": lambda: blur_hv(thesis_blur_pass, full, depth),
+        "bilateral_blur_hv_into": lambda: blur_hv(thesis_blur_pass, full, depth, out=spare),
         "radial_blur_64": lambda: radial_blur(full, (0.5, 0.4), 64, 0.9, 0.5, 0.97, 0.3),
         "composite": lambda: composite_physical(full, trans, full),
     }

@@ -113,7 +113,8 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
     each row and column, whose cross product is the plane's normal), and a corner counts as on a side only when it
     is farther than ``1e-9`` times the box's distance from it: ~10⁶ times more than the rounding of the rays and of
     the slab test (:func:`~vlref.geometry.bvh.ray_box`), so a ray left out would have missed the box there too
-    (the same bits). Rows or columns too few (one) or too close in direction to span a plane are not culled.
+    (the same bits). Rows or columns too few (one) or too close in direction to span a plane are not culled. The
+    rows' planes and the columns' are tested in one stack (half the NumPy calls: ~20 µs of an 80x45 frame).
     """
     h, w = dirs.shape[0], dirs.shape[1]
     if geo.pnode_min.shape[0] == 0 or h == 0 or w == 0:
@@ -121,16 +122,13 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
     lo, hi = geo.pnode_min[0], geo.pnode_max[0]
     corners = np.array(list(itertools.product(*zip(lo.tolist(), hi.tolist())))) - origin
     margin = 1e-9 * (float(np.abs(corners).max()) + 1.0)
-
-    def may_cross(first, last):
-        normal = cross(first, last)
-        norm = np.linalg.norm(normal, axis=-1)
-        side = corners @ (normal / np.maximum(norm, 1e-300)[:, None]).T
-        apart = (side > margin).all(axis=0) | (side < -margin).all(axis=0)
-        return ~apart | (norm < 1e-6)
-
-    rows = may_cross(dirs[:, 0], dirs[:, -1]) if w > 1 else np.ones(h, dtype=bool)
-    cols = np.flatnonzero(may_cross(dirs[0], dirs[-1]) if h > 1 else np.ones(w, dtype=bool))
+    normal = cross(np.concatenate((dirs[:, 0], dirs[0])), np.concatenate((dirs[:, -1], dirs[-1])))
+    square = normal * normal
+    norm = np.sqrt((square[:, 0] + square[:, 1]) + square[:, 2])  # np.linalg.norm's sum, in its order
+    side = corners @ (normal / np.maximum(norm, 1e-300)[:, None]).T
+    crosses = ~((side > margin).all(axis=0) | (side < -margin).all(axis=0)) | (norm < 1e-6)
+    rows = crosses[:h] if w > 1 else np.ones(h, dtype=bool)
+    cols = np.flatnonzero(crosses[h:] if h > 1 else np.ones(w, dtype=bool))
     spans = np.zeros((h, 2), dtype=np.int64)
     if cols.size:
         spans[rows] = (cols[0], cols[-1] + 1)

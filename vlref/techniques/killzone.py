@@ -95,10 +95,10 @@ def render(scene, frame) -> dict:
         buffers[res] = buf
 
     light = buffers["full"]
-    if p.blur:
-        blur_h, light = blur_hv(thesis_blur_pass, light, depth, radius=p.blur_radius, sigma=p.blur_sigma,
-                                depth_factor=p.blur_depth_factor, depth_weight_kind=p.blur_depth_weight,
-                                epsilon=p.upsample_epsilon)
+    if p.blur:  # the vertical pass writes into the full-resolution sums (this function's own; stored as copies)
+        blur_h, light = blur_hv(thesis_blur_pass, light, depth, out=light, radius=p.blur_radius,
+                                sigma=p.blur_sigma, depth_factor=p.blur_depth_factor,
+                                depth_weight_kind=p.blur_depth_weight, epsilon=p.upsample_epsilon)
         out["blur_h"], out["blur_v"] = blur_h, light
     dirs = cam.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
