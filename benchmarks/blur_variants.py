@@ -23,10 +23,6 @@ from radial_variants import variant
 from vlref.post.downsample import downsample_min
 
 SOURCE = pathlib.Path(__file__).resolve().parents[1] / "vlref" / "post" / "blur.py"
-QUOTIENTS = """        texels[3 * i] = quotient(a0 + w * rows[vrow, 0, j], s, y)
-        texels[3 * i + 1] = quotient(a1 + w * rows[vrow, 1, j], s, y)
-        texels[3 * i + 2] = quotient(a2 + w * rows[vrow, 2, j], s, y)"""
-"""The RGB output's three divisions in this tree's blur.py (``_close_rgb``)."""
 VARIANTS = {
     "tree": ("", ""),
     "main": ("", ""),  # the --main copy
@@ -37,17 +33,19 @@ VARIANTS = {
     "exp_ymm": ("    prefer_wide_vectors()\n    n = out.size\n", "    n = out.size\n"),
     "blocks4": ("float(epsilon), 2 * get_num_threads(), lines)", "float(epsilon), 4 * get_num_threads(), lines)"),
     "frame": ("radius: int = 3, sigma", "radius: int = 0, sigma"),
-    "no_div": (QUOTIENTS, QUOTIENTS.replace("quotient(", "(").replace(", s, y)", ") * s")),
-    "reciprocal": (QUOTIENTS, QUOTIENTS.replace("quotient(", "(").replace(", s, y)", ") * y")),
+    "no_div": ("""        texels[3 * i] = (a0 + w * rows[vrow, 0, j]) / s
+        texels[3 * i + 1] = (a1 + w * rows[vrow, 1, j]) / s
+        texels[3 * i + 2] = (a2 + w * rows[vrow, 2, j]) / s""", """        texels[3 * i] = (a0 + w * rows[vrow, 0, j]) * s
+        texels[3 * i + 1] = (a1 + w * rows[vrow, 1, j]) * s
+        texels[3 * i + 2] = (a2 + w * rows[vrow, 2, j]) * s"""),
     "no_exp": ("sigma: float = 1.5, depth_factor: float = 1.0", "sigma: float = 1.5, depth_factor: float = 0.0"),
 }
 """One replaced text each in this tree's blur.py (``tree``: none; ``main``: ``--main``'s file as it is). ``ymm``: the
 block's loops at the CPU's preferred width (256 bits on Intel's server cores); ``planes512``: the planes split with
 512-bit vectors too; ``blocks1``, ``blocks4``: one or four blocks of rows per thread instead of two; ``exp_ymm``: the
 Gaussian weights' loop at the CPU's preferred width. Not the pass's bits, to split its time: ``frame`` (radius 0: the
-planes, the centre weight, the division and the output), ``reciprocal`` (the RGB output as ``acc * (1 / wsum)``,
-without :func:`vlref.numeric.quotient`'s correction: within 2 ulp of the division), ``no_exp`` (depth weight 1: no
-``exp``) and ``no_div`` (the RGB output multiplied by the weight sum instead of divided: the divider's share)."""
+planes, the centre weight, the division and the output), ``no_exp`` (depth weight 1: no ``exp``) and ``no_div`` (the
+RGB output multiplied by the weight sum instead of divided: the divider's share)."""
 
 
 def inputs(h: int, w: int):

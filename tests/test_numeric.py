@@ -1,5 +1,5 @@
 """vlref.numeric: ``exp`` and ``expm1`` written for vectorised lane loops, against libm (NumPy's ``exp`` /
-``expm1``), ``cast``, and ``quotient`` against the division."""
+``expm1``), and ``cast``."""
 
 import decimal
 import math
@@ -11,7 +11,7 @@ from hypothesis import given, strategies as st
 from numba import njit
 
 from vlref.numeric import (_GEXP_TABLE, arrays_do_not_overlap, cast, exp, expm1, fma, glibc_exp, glibc_exp_normal,
-                           is_float64, prefer_wide_vectors, quotient)
+                           is_float64, prefer_wide_vectors)
 
 
 @njit(cache=True)
@@ -257,49 +257,3 @@ def test_the_exp_table_by_square_roots_equals_the_table_by_powers():
             expected[2 * k + 1] = np.float64(head).view(np.int64) - (k << 45)
     assert np.array_equal(_GEXP_TABLE, expected)
     assert _GEXP_TABLE[1] == np.float64(1.0).view(np.int64) and _GEXP_TABLE[0] == 0  # k = 0: 2^0 = 1 exactly
-
-
-@njit(cache=True, error_model="numpy")
-def _quotients(a, b, out):
-    for i in range(a.size):
-        out[i] = quotient(a[i], b[i], 1.0 / b[i])
-
-
-def _ulps_apart(got, ref):
-    """Ulps between two float64 arrays of the same signs (the distance of their bit patterns)."""
-    return np.abs(got.view(np.int64) - ref.view(np.int64))
-
-
-@pytest.mark.parametrize("lo, hi", [(-4, 4), (-300, 300), (-480, 480)])
-def test_quotient_has_the_divisions_bits(lo, hi):
-    # Markstein's correction of a * (1 / b): the correctly rounded a / b, on dividends and divisors of any sign and
-    # binade in the range (2^lo .. 2^hi), each significand drawn uniformly; the plain product is not (the check has
-    # something to correct)
-    rng = np.random.default_rng(hi)
-    n = 400_000
-    a, b = (rng.uniform(1.0, 2.0, n) * np.ldexp(rng.choice([-1.0, 1.0], n), rng.integers(lo, hi, n)) for _ in "ab")
-    got = np.empty(n)
-    _quotients(a, b, got)
-    assert np.array_equal(got.view(np.int64), (a / b).view(np.int64))
-    assert (a * (1.0 / b) != a / b).mean() > 0.1
-
-
-def test_quotient_of_sums_near_zero_within_an_ulp_and_special_values_as_the_division():
-    # dividends within 2^-969 |b| of 0, where the remainder a - b q need not be a float: an ulp at most (subnormal
-    # quotients included); infinities, NaN and zeros: what the division gives
-    rng = np.random.default_rng(3)
-    n = 400_000
-    a = rng.uniform(1.0, 2.0, n) * np.ldexp(1.0, rng.integers(-1074, -960, n))
-    b = rng.uniform(1.0, 2.0, n) * np.ldexp(1.0, rng.integers(-4, 4, n))
-    got = np.empty(n)
-    _quotients(a, b, got)
-    apart = _ulps_apart(got, a / b)
-    assert apart.max() <= 1 and (apart == 0).mean() > 0.9
-    special = np.array([0.0, 1.0, 3.0, 1e300, np.inf, -np.inf, np.nan])
-    a, b = (x.ravel() for x in np.meshgrid(special, special[1:]))
-    got = np.empty(a.size)
-    _quotients(a, b, got)
-    with np.errstate(all="ignore"):
-        ref = a / b
-    assert np.array_equal(got, ref, equal_nan=True)
-    assert np.array_equal(np.signbit(got[~np.isnan(ref)]), np.signbit(ref[~np.isnan(ref)]))

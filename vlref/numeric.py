@@ -1,7 +1,6 @@
 """Numeric helpers shared by the kernels: the float-type helpers :func:`cast` and :func:`zero_one`, and
 :func:`exp` / :func:`expm1` written out so that LLVM can vectorise the loops that call them, and :func:`glibc_exp`,
-libm's ``exp`` bit for bit (glibc's algorithm, written out the same way; its docstring), and :func:`quotient`,
-a division's bits from a reciprocal shared by several dividends.
+libm's ``exp`` bit for bit (glibc's algorithm, written out the same way; its docstring).
 
 ``exp`` and ``expm1`` (float64 arithmetic; a float32 argument gives the float32 rounding of the float64 value):
 the argument is reduced as ``x = n ln2 + r``, ``n = round(x / ln2)``, ``|r| <= ln2/2``, with ``ln2`` split in
@@ -37,7 +36,7 @@ from numba.extending import intrinsic, overload
 from .jit import njit
 
 __all__ = ["cast", "zero_one", "is_float64", "exp", "expm1", "fma", "prefer_wide_vectors", "arrays_do_not_overlap",
-           "glibc_exp", "glibc_exp_normal", "quotient"]
+           "glibc_exp", "glibc_exp_normal"]
 
 
 def cast(like, value):
@@ -294,21 +293,3 @@ def glibc_exp(x):
     y = (0.0 if x < 0.0 else np.inf) if abstop >= 0x409 else y
     y = 1.0 + x if abstop >= 0x7FF or abstop < 0x3C9 else y
     return 0.0 if x == -np.inf else y
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def quotient(a, b, y):
-    """``a / b`` correctly rounded, from ``y = 1 / b`` (rounded, computed once for several dividends) by a product and
-    two :func:`fma`: ``q = a y``, the remainder ``r = a - b q`` (exact, one rounding of an exact value), then
-    ``q + r y`` rounded once. Markstein's theorem (P. Markstein, "Computation of elementary functions on the IBM
-    RISC System/6000 processor", IBM J. Res. Dev. 34(1), 1990; Muller et al., *Handbook of Floating-Point
-    Arithmetic*, 2018, §4.7): with ``y`` the rounded ``1/b`` and ``q`` within an ulp of ``a/b``, ``q + r y`` rounds
-    to the rounded ``a/b``, provided the remainder is a float (its exponent, about ``e_b + e_q``, at least
-    ``-970``: Boldo & Daumas) and ``y`` is a normal number. So the same bits as ``a / b`` wherever ``2^-1022 <
-    |b| < 2^1022`` and ``|a|`` is above about ``2^-969 |b|``; below that (results within ``2^-969`` of 0) it may
-    differ from ``a / b`` by an ulp (tests/test_numeric.py measures both). A non-finite remainder (``a`` or ``b``
-    infinite or NaN, ``b = 0``) returns ``q``: ``inf``, 0 or NaN as the division gives them. Three divisions cost
-    about six times one product on Intel's server cores (``vdivpd``: about two cycles a lane)."""
-    q = a * y
-    r = fma(-b, q, a)
-    return q if r != r else fma(r, y, q)

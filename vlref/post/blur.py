@@ -28,7 +28,7 @@ import numpy as np
 from numba import get_num_threads, prange
 
 from vlref.jit import njit
-from vlref.numeric import arrays_do_not_overlap, glibc_exp, glibc_exp_normal, prefer_wide_vectors, quotient
+from vlref.numeric import arrays_do_not_overlap, glibc_exp, glibc_exp_normal, prefer_wide_vectors
 from vlref.parallel import borrowed
 from vlref.post.resolution import check_choice, check_positive, nearest_index, point_texel, uv_row_map
 
@@ -275,19 +275,18 @@ def _add_rgb_taps(ga, gb, T, weights, rows, values, first, end, c0, fresh, acc, 
 @njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
 def _close_rgb(gk, T, wrow, wshift, rows, vrow, vshift, end, c0, fresh, acc, wsum, out, r):
     """The stretch's last tap on three channels (:func:`_add_tap` from column ``c0``) and its end, in one loop: the
-    sums with the tap added are divided (``acc / wsum``, :func:`_finish_stretch`'s one reciprocal per texel) and
-    written into ``out[r, c]``'s three channels, spelled out into the flat line; the sums are not stored back. The
-    same operations and order as the tap, then the division (NumPy's error model, as :func:`_finish_stretch`)."""
+    sums with the tap added are divided (``acc / wsum``) and written into ``out[r, c]``'s three channels, spelled
+    out into the flat line; the sums are not stored back. The same operations and order as the tap, then the
+    division (NumPy's error model, as :func:`_finish_stretch`)."""
     arrays_do_not_overlap()
     texels = out[r, c0:end].reshape(3 * (end - c0))
     for c in range(c0, end):
         w, i, j = gk * T[wrow, np.uint64(c + wshift)], np.uint64(c - c0), np.uint64(c + vshift)
         s, a0, a1, a2 = _sums(wsum, acc, i, fresh)
         s = s + w
-        y = 1.0 / s
-        texels[3 * i] = quotient(a0 + w * rows[vrow, 0, j], s, y)
-        texels[3 * i + 1] = quotient(a1 + w * rows[vrow, 1, j], s, y)
-        texels[3 * i + 2] = quotient(a2 + w * rows[vrow, 2, j], s, y)
+        texels[3 * i] = (a0 + w * rows[vrow, 0, j]) / s
+        texels[3 * i + 1] = (a1 + w * rows[vrow, 1, j]) / s
+        texels[3 * i + 2] = (a2 + w * rows[vrow, 2, j]) / s
 
 
 @njit(cache=True, fastmath=False, forceinline=True)
@@ -307,18 +306,17 @@ def _tap(t, K, axis, r, H, base, c0, c1):
 
 @njit(cache=True, fastmath=False, forceinline=True, error_model="numpy")
 def _finish_stretch(acc, wsum, n, out, r, c0):
-    """``out[r, c0 + i, ch] = acc[ch, i] / wsum[i]`` for ``i < n``, by one division per texel, not one per channel:
-    ``1 / wsum`` and :func:`~vlref.numeric.quotient` (the same bits as the division wherever the sums are not within
-    ``2^-969`` of 0; there within an ulp). Vectorised: NumPy's error model, so a zero ``wsum`` would give
-    ``inf``/NaN rather than raise; the centre tap's weight keeps it positive. Three channels (RGB) end in
-    :func:`_close_rgb` instead."""
+    """``out[r, c0 + i, ch] = acc[ch, i] / wsum[i]`` for ``i < n`` (vectorised: NumPy's error model, so a zero ``wsum``
+    would give ``inf``/NaN rather than raise; the centre tap's weight keeps it positive). Three channels (RGB) end
+    in :func:`_close_rgb` instead."""
     arrays_do_not_overlap()
+    for ch in range(acc.shape[0]):
+        for i in range(n):
+            acc[ch, i] = acc[ch, i] / wsum[i]
     line = out[r]
     for i in range(n):
-        s = wsum[i]
-        y = 1.0 / s
         for ch in range(acc.shape[0]):
-            line[c0 + i, ch] = quotient(acc[ch, i], s, y)
+            line[c0 + i, ch] = acc[ch, i]
 
 
 @njit(cache=True, fastmath=False)
@@ -392,8 +390,7 @@ def _bilateral_lines(v, z, axis, g, code, factor, epsilon, blocks, out):
     weights, not ``2K`` (:func:`_pair_tables`): tap ``-m`` at position ``p`` is tap ``+m`` at ``p - m``, and a tap
     clamped to position 0 is position 0's tap ``+p`` (``p = 0``: its centre weight). Per pixel the same operations
     in the same order as :func:`_blur_lines` (``w = g_|k| W``, ``acc += w v``, ``wsum += w`` from 0, tap by tap,
-    then ``acc / wsum``, by one reciprocal per texel and :func:`~vlref.numeric.quotient`): the same bits (but for sums
-    within ``2^-969`` of 0, where an ulp apart at most).
+    then ``acc / wsum``): the same bits.
 
     The values are read as planes of one line (:func:`_planar_row`), so a tap is one contiguous loop per channel
     (:func:`_add_tap`), and a line is summed in stretches of ``_CHUNK`` columns, all taps of a stretch before the next,
