@@ -18,7 +18,6 @@ The first call of the kernel (its load from the cache) is timed apart, before th
 """
 
 import json
-import math
 import statistics
 import sys
 import time
@@ -30,39 +29,24 @@ from vlref.cli.commands import program_command
 
 program_command("render")  # the modules `vlref render` imports
 
+from march_bands import SAMPLES_PER_BAND, march_inputs  # noqa: E402 (this folder's; its frame's inputs)
 from vlref.bench import bench_scene  # noqa: E402
-from vlref.march.patterns import offsets  # noqa: E402
 from vlref.march.physical import TILE_H, march_physical, march_tiles  # noqa: E402
-from vlref.medium import pack_medium  # noqa: E402
 from vlref.progress import bands_for, reporting, row_bands, watched  # noqa: E402
 from vlref.render import prepare_frame  # noqa: E402
-from vlref.scene.technique_params import resolved  # noqa: E402
-
-MAIN_SAMPLES_PER_BAND = 2_000_000  # main's vlref.techniques.physical.SAMPLES_PER_BAND
-
 
 def main(out_path: str, width: int = 1920, height: int = 1080, steps: int = 64, rounds: int = 3, *threads: int):
     scene = bench_scene(width, height, steps, "four", 1024)
     frame = prepare_frame(scene)
-    sm = frame.shadow_maps()
-    h, w = frame.gbuffer.distance.shape
-    dirs = frame.camera.ray_directions(w, h, copy=False)
-    t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
-    beta = offsets(resolved(scene, "sampling"), w, h, scene.render.seed)
-    medium = pack_medium(scene, np.float64)
-    packed = frame.lights.astype(np.float64)
-    position = np.asarray(frame.camera.position, dtype=np.float64)
-    geo = frame.geometry.arrays if sm.traces_rays else None
-    fixed = (position, dirs, t_end, beta, steps, medium, packed, sm.table, geo,
-             bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))))
+    fixed, h, w, count = march_inputs(scene, frame, steps)
     everything = (np.int64(0), np.int64(h))
 
     def outputs():
-        return np.empty((packed.count, h, w, 3)), np.empty((h, w))
+        return np.empty((count, h, w, 3)), np.empty((h, w))
 
     def bands():
         per, trans = outputs()
-        n = bands_for(h * w * steps * packed.count, MAIN_SAMPLES_PER_BAND * numba.get_num_threads())
+        n = bands_for(h * w * steps * count, SAMPLES_PER_BAND * numba.get_num_threads())
         for y0, y1 in row_bands(h, n, TILE_H):
             march_physical(*fixed, per, trans, (np.int64(y0), np.int64(y1)))
         return per, trans
