@@ -61,11 +61,17 @@ def test_the_march_reports_progress_while_its_one_launch_runs(monkeypatch):
     monkeypatch.setattr(progress, "POLL_S", 0.002)
     scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=200"])
     calls = []
+
     def launching() -> bool:
         return any(t.name == "vlref-launch" for t in threading.enumerate())
 
-    with reporting(lambda done, total: calls.append((done, total, launching()))):
-        render(scene)
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))  # 5.8 M samples a thread: above SAMPLES_WATCHED
+    try:
+        with reporting(lambda done, total: calls.append((done, total, launching()))):
+            render(scene)
+    finally:
+        numba.set_num_threads(before)
     assert len(calls) >= 10 and calls[-1][:2] == (180, 180)
     assert all(total == 180 and 0 < done < 180 for done, total, _ in calls[:-1])
     assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
@@ -100,6 +106,17 @@ def test_a_signal_stops_the_march_within_a_tile_and_leaves_no_launch_running():
     # 4096 steps over 230 400 pixels: ~25 s on two threads; the stop waits for a tile (~0.5 M samples: ~0.02 s)
     assert stopped < 1.5 and calls[-1] < 180
     assert np.isfinite(small.buffers["final"]).all()
+
+
+def test_a_small_march_runs_on_the_calling_thread_and_reports_its_end():
+    """Below SAMPLES_WATCHED per thread the march is one launch on the calling thread, no thread of its own."""
+    from vlref.techniques.physical import SAMPLES_WATCHED
+
+    calls = []
+    with reporting(lambda done, total: calls.append((done, total, [t.name for t in threading.enumerate()]))):
+        render(load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"]))
+    assert 32 * 18 * 8 < SAMPLES_WATCHED and [c[:2] for c in calls] == [(18, 18)]
+    assert "vlref-launch" not in calls[0][2]
 
 
 def test_the_reference_reports_progress_band_by_band(monkeypatch):

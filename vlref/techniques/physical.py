@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 
 from ..march.patterns import offsets
@@ -24,7 +25,12 @@ from ..post.composite import sum_and_composite
 from ..progress import watched
 from ..scene.technique_params import resolved
 
-__all__ = ["render", "march_buffers"]
+__all__ = ["render", "march_buffers", "SAMPLES_WATCHED"]
+
+# pixel × step × light samples per thread above which the march runs on a thread of its own, watched (a moving bar,
+# Ctrl-C within a tile's time: vlref.progress.watched); below, ~0.04 s on a 16-core server and ~0.1 s on a busy
+# 2-core box, it runs on the calling thread (a thread and its OpenMP team cost ~0.5 ms a launch)
+SAMPLES_WATCHED = 2_000_000
 
 
 def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, steps: int, sampling: str):
@@ -42,7 +48,7 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     packed = lights.astype(dtype)
     per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
     trans = np.empty((h, w), dtype=dtype)
-    # The frame is marched in one launch, watched (vlref.progress.watched: a moving bar, Ctrl-C within a tile's time)
+    # The frame is marched in one launch, watched where it is long (SAMPLES_WATCHED)
     position = np.asarray(camera.position, dtype=dtype)
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
     # (a second, smaller kernel; vlref.march.physical.march_physical)
@@ -51,7 +57,8 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     args = (position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.table, traced,
             bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light, trans,
             (np.int64(0), np.int64(h)), taken)
-    watched(lambda: march_physical(*args), taken, march_tiles(w, h), h)
+    threaded = h * w * int(steps) * packed.count > SAMPLES_WATCHED * numba.get_num_threads()
+    watched(lambda: march_physical(*args), taken, march_tiles(w, h), h, threaded)
     return per_light, trans
 
 
