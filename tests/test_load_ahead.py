@@ -1,8 +1,8 @@
 """A warm render's later stages loaded ahead on a thread (vlref.ahead.compile_ahead): in the ``vlref render``
 program's process with a warm cache, the block loads the functions chosen for the render's cached stages from
 Numba's cache (nothing compiled, nothing else loaded) before the render calls them, and the render writes the same
-bytes; the choice takes only a signature the cache holds alone (for the march's kernel, its work and the lights' sum,
-of the scene's variant) of a cached stage."""
+bytes; the choice takes only a signature the cache holds alone (for the march's kernel, the scene's variant) of a
+cached stage."""
 
 import dataclasses
 import json
@@ -11,7 +11,6 @@ import sys
 
 import numba
 import numpy as np
-from numba.core.typing import signature
 
 import vlref.ahead as ahead
 from vlref.bench import bench_scene
@@ -64,13 +63,7 @@ def test_only_a_signature_the_cache_holds_alone_is_loaded_ahead(monkeypatch):
     held = {f: ["one"] for fs in ahead.LOADED_AHEAD.values() for f in fs}
     held[ahead._shade] = ["one", "other"]  # two signatures: the render's call picks its own
     no_rays = (None,) * 7 + (numba.types.none,)  # the kernel's argument ``geo`` (8): None without shadow rays
-    # the work: ``origin`` its argument 5, ``geo`` 12; the lights' sum: the per-light buffers first
-    work32, work64 = (None,) * 5 + float32 + (None,) * 6, (None,) * 5 + float64 + (None,) * 6
-    buffers = [(numba.typeof(np.zeros((1, 1, 1, 3), dtype=dtype)), None) for dtype in (np.float32, np.float64)]
-    marches = {ahead._march_kernel: [float32 + no_rays, float64 + no_rays, float64 + (None,) * 8],
-               ahead._march_tasks: [signature(numba.types.none, *args) for args in  # its key: a Signature
-                                    (work32 + (numba.types.none,), work64 + (None,), work64 + (numba.types.none,))],
-               ahead._sum_composite: buffers}
+    marches = {ahead._march_kernel: [float32 + no_rays, float64 + no_rays, float64 + (None,) * 8]}
 
     def signatures(function, wanted=lambda sig: True):
         return [sig for sig in marches.get(function, held[function]) if wanted(sig)]
@@ -81,7 +74,5 @@ def test_only_a_signature_the_cache_holds_alone_is_loaded_ahead(monkeypatch):
     assert [f for f, _ in chosen] == [ahead._cast_rows, ahead._raycast_kernel, ahead._shade_rows, ahead._march_tasks,
                                       ahead._march_kernel, ahead._sum_composite]
     assert dict(chosen)[ahead._march_kernel] == float64 + no_rays  # the scene's variant, of the three held
-    assert dict(chosen)[ahead._march_tasks].args == work64 + (numba.types.none,) and dict(chosen)[ahead._sum_composite] == \
-        buffers[1]
     radial = scene.replace(render=dataclasses.replace(scene.render, technique="radial"))
     assert ahead._to_load_ahead(radial, cold=[])[-1][0] is ahead._cast_face  # no march for another technique

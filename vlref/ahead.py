@@ -125,34 +125,12 @@ def _compile_stage_process(stage: str, scene) -> None:
     compile_stage(stage, scene)
 
 
-def _march_wanted(dtype, rays: bool, origin: int = 0, geo: int = 8):
+def _march_wanted(dtype, rays: bool):
     """The march's cache entries for ``dtype`` and the shadow-ray variant (``rays``): its argument ``geo`` is
-    None without the ray tracer. ``origin``, ``geo``: the indices of those arguments (the kernel's by default;
-    :func:`_march_tasks` has them at 5 and 12)."""
+    None without the ray tracer."""
     want = numba.typeof(np.zeros(3, dtype=dtype))
-
-    def wanted(sig) -> bool:
-        args = _arguments(sig)
-        return len(args) > geo and args[origin] == want and (args[geo] != numba.types.none) == rays
-
-    return wanted
-
-
-def _arguments(sig) -> tuple:
-    """The argument types of a cache entry's signature: a tuple of types, or a Numba ``Signature`` (the key of a
-    function compiled for an explicit signature: the work of :func:`vlref.parallel.work`)."""
-    return tuple(getattr(sig, "args", sig))
-
-
-def _variants(scene) -> dict:
-    """For the functions of :data:`LOADED_AHEAD` that the cache may hold in several variants of which a render of
-    ``scene`` calls one: which signatures are that one (the march's kernel and work: ``scene``'s precision and
-    shadow-ray variant; the lights' sum and composite: its precision, the dtype of its first argument)."""
-    dtype = np.float32 if scene.render.precision == "float32" else np.float64
-    rays = any(_exact(light) for light in scene.lights)
-    buffers = numba.from_dtype(dtype)
-    return {_march_kernel: _march_wanted(dtype, rays), _march_tasks: _march_wanted(dtype, rays, 5, 12),
-            _sum_composite: lambda sig: getattr(_arguments(sig)[0], "dtype", None) == buffers}
+    geo = 8  # _march_kernel's argument ``geo``
+    return lambda sig: len(sig) > geo and sig[0] == want and (sig[geo] != numba.types.none) == rays
 
 
 AHEAD: dict[str, tuple[str, object]] = {
@@ -213,23 +191,21 @@ LOADED_AHEAD: dict[str, tuple] = {
     "march": (_march_tasks, _march_kernel, _sum_composite),
 }
 """What :func:`compile_ahead` loads on a thread where the stage is cached: the kernel of :data:`AHEAD` with the
-functions it calls by address (:func:`vlref.parallel.work`), and for the march the composite of its buffers (those
-three of the scene's variant, :func:`_variants`)."""
+functions it calls by address (:func:`vlref.parallel.work`), and for the march the composite of its buffers."""
 
 
 def _to_load_ahead(scene, cold: list[str]) -> list[tuple]:
     """``(function, signature)`` of :data:`LOADED_AHEAD` for the stages of ``scene``'s render that are cached (not in
-    ``cold``), where the cache holds one signature for the function's current source (for the march's kernel and
-    work and the lights' sum: one of ``scene``'s variant, :func:`_variants`, as a cache filled by ``vlref warmup``
-    or the bench holds the float32 and shadow-ray variants too); where it holds several, the render loads the one it
-    calls."""
-    variants = _variants(scene)
+    ``cold``), where the cache holds one signature for the function's current source (for the march's kernel: one
+    of ``scene``'s precision and shadow-ray variant); where it holds several, the render loads the one it calls."""
+    dtype = np.float32 if scene.render.precision == "float32" else np.float64
+    march = _march_wanted(dtype, any(_exact(light) for light in scene.lights))
     used = _stages_used(scene)
     out = []
     for stage, functions in LOADED_AHEAD.items():
         if used[stage] and stage not in cold:
             for function in functions:
-                sigs = _cached_signatures(function, variants.get(function, lambda sig: True))
+                sigs = _cached_signatures(function, march if function is _march_kernel else lambda sig: True)
                 if len(sigs) == 1:
                     out.append((function, sigs[0]))
     return out
