@@ -108,6 +108,27 @@ def test_a_signal_stops_the_march_within_a_tile_and_leaves_no_launch_running():
     assert np.isfinite(small.buffers["final"]).all()
 
 
+def test_watched_raises_the_launchs_error_and_lets_an_exception_go_on_only_once_the_launch_has_stopped():
+    def failing():
+        raise ValueError("from the launch")
+
+    with pytest.raises(ValueError, match="from the launch"):
+        progress.watched(failing, np.zeros(1, dtype=np.int64), 10, 10)
+    taken, ended = np.full(1, 100, dtype=np.int64), []  # a tenth of the tasks handed out: the listener is called
+
+    def endless():  # runs until the counter is past the last task
+        while taken[0] < 1000:
+            time.sleep(0.001)
+        ended.append(int(taken[0]))
+
+    def listener(done, total):
+        raise RuntimeError("from the listener")
+
+    with pytest.raises(RuntimeError, match="from the listener"), reporting(listener):
+        progress.watched(endless, taken, 1000, 100)
+    assert ended == [progress.EXHAUSTED]  # stopped by the counter, before the exception went on
+
+
 def test_a_small_march_runs_on_the_calling_thread_and_reports_its_end():
     """Below SAMPLES_WATCHED per thread the march is one launch on the calling thread, no thread of its own."""
     from vlref.techniques.physical import SAMPLES_WATCHED
