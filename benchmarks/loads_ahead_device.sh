@@ -1,6 +1,7 @@
 #!/bin/bash
 # Whether loading the march's work and the lights' sum ahead (the scene's variant) pays in the whole render, beside
-# the one watched launch (BENCHMARKS.md, "The march in one launch, watched"). Run in the lead's checkout on the device
+# the one watched launch (BENCHMARKS.md, "The march in one launch, watched"; run at 574cede, whose vlref/ahead.py
+# loaded them so; the change was then reverted, and the swap below is a no-op in later trees). Run in the lead's checkout on the device
 # with .dev/MAIN and .dev/BRANCH carried:
 #     bash .dev/BRANCH/benchmarks/loads_ahead_device.sh MAIN BRANCH ROUNDS
 # Each tree's own Numba cache holds the float32 variant of the march's stage and the float64 render of (b) (as the

@@ -10,8 +10,9 @@ it returns, so a progress bar cannot move and Ctrl-C waits for the end. Two ways
   thread, a listener's error), the counter is set past every task: each kernel thread ends with the task it holds
   (a tile: milliseconds), the launch returns, and only then does the exception go on, so no other parallel launch
   ever overlaps this one (Numba's ``workqueue`` threading layer aborts on that) and no array the kernel borrows is
-  freed under it. One launch instead of bands: no launch, tail and first touch of the outputs per band (17 bands of
-  (b) at 1080p cost ~0.05 s on a 16-core server; BENCHMARKS.md "The march in fewer bands").
+  freed under it. One launch instead of bands: no launch, tail and first touch of the outputs per band (in one
+  process 16 bands of (b) at 1080p took 0.05 s more than one on a 16-core server, BENCHMARKS.md "The march in fewer
+  bands"; a fresh render's volumetric stage ~0.026 s less, "The march in one launch, watched").
 * **Bands of rows** (:func:`row_bands`; the quadrature reference). The kernel runs once per band; between bands
   the interpreter runs (signal handlers included) and the band is reported.
 
@@ -31,7 +32,7 @@ from typing import Callable, Iterator
 import numba
 import numpy as np
 
-__all__ = ["BANDS", "POLL_S", "bands_for", "row_bands", "reporting", "watched"]
+__all__ = ["BANDS", "POLL_S", "EXHAUSTED", "bands_for", "row_bands", "reporting", "watched"]
 
 # At most this many bands per kernel call (about 1.5 % of the frame each). Each band is one parallel
 # launch, whose end waits for every thread: tens of microseconds on an idle machine, but a few
@@ -95,8 +96,8 @@ def watched(launch: Callable[[], None], taken: np.ndarray, tasks: int, height: i
     here.
 
     ``threaded`` False (a launch too short for a bar or an interrupt to matter): ``launch()`` runs on this thread, then
-    the listener gets ``(height, height)``; no thread to start, no second OpenMP team (a thread that launches a
-    parallel kernel has a team of its own: ~0.5 ms more per launch, measured on the dev box)."""
+    the listener gets ``(height, height)``; no thread to start (0.5-3.5 ms more per launch on the busy dev box:
+    BENCHMARKS.md "The march in one launch, watched")."""
     listener = _listener.get()
     if not threaded:
         launch()

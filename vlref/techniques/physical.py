@@ -29,7 +29,7 @@ __all__ = ["render", "march_buffers", "SAMPLES_WATCHED"]
 
 # pixel × step × light samples per thread above which the march runs on a thread of its own, watched (a moving bar,
 # Ctrl-C within a tile's time: vlref.progress.watched); below, ~0.04 s on a 16-core server and ~0.1 s on a busy
-# 2-core box, it runs on the calling thread (a thread and its OpenMP team cost ~0.5 ms a launch)
+# 2-core box, it runs on the calling thread (a thread of its own cost 0.5-3.5 ms a launch on the busy dev box)
 SAMPLES_WATCHED = 2_000_000
 
 
