@@ -1,7 +1,8 @@
-"""Progress band by band and clean interrupts.
+"""Progress of long kernels and clean interrupts.
 
-* The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
-  bands change no bit of a result.
+* The physical march is one launch, watched: progress while it runs, a signal stops it within a tile's time, and
+  no launch is left running; the quadrature reference reports progress once per band of rows. Neither the bands
+  nor the order in which threads take tiles changes a bit of a result.
 * SIGINT / SIGTERM during every long command (render, render --frames, reference, bias, sweep, golden
   build / verify, march, bench, warmup), in this process or on a ``--scheduler local:2`` cluster: one line
   ``vlref: interrupted``, exit 130 / 143, no traceback (nor from a child process), no output folder and no
