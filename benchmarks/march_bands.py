@@ -38,31 +38,40 @@ from vlref.scene.technique_params import resolved  # noqa: E402
 from vlref.techniques import physical  # noqa: E402
 
 
-def main(out_path: str, steps: int = 64, width: int = 1920, height: int = 1080) -> None:
-    report = {"threads": numba.get_num_threads(), "threading_layer": None}
-    scene = bench_scene(width, height, steps, "four", 1024)
-    frame = prepare_frame(scene)
-    report["threading_layer"] = numba.threading_layer()
+SAMPLES_PER_BAND = 2_000_000  # the march's band size before it ran in one launch (per thread per band)
+
+
+def march_inputs(scene, frame, steps: int) -> tuple:
+    """``(fixed, h, w, count)``: the arguments of ``march_physical`` before its outputs (float64) for ``frame`` of
+    ``scene``, the frame's size and the light count."""
     sm = frame.shadow_maps()
     h, w = frame.gbuffer.distance.shape
     dirs = frame.camera.ray_directions(w, h, copy=False)
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
     beta = offsets(resolved(scene, "sampling"), w, h, scene.render.seed)
-    medium = pack_medium(scene, np.float64)
     packed = frame.lights.astype(np.float64)
-    position = np.asarray(frame.camera.position, dtype=np.float64)
-    leg = int(math.ceil(math.sqrt(steps)))
-    ext = bool(scene.techniques.physical.light_extinction)
-    default = bands_for(h * w * steps * packed.count, physical.SAMPLES_PER_BAND * numba.get_num_threads())
+    geo = frame.geometry.arrays if sm.traces_rays else None
+    fixed = (np.asarray(frame.camera.position, dtype=np.float64), dirs, t_end, beta, steps,
+             pack_medium(scene, np.float64), packed, sm.table, geo, bool(scene.techniques.physical.light_extinction),
+             int(math.ceil(math.sqrt(steps))))
+    return fixed, h, w, packed.count
+
+
+def main(out_path: str, steps: int = 64, width: int = 1920, height: int = 1080) -> None:
+    report = {"threads": numba.get_num_threads(), "threading_layer": None}
+    scene = bench_scene(width, height, steps, "four", 1024)
+    frame = prepare_frame(scene)
+    report["threading_layer"] = numba.threading_layer()
+    fixed, h, w, count = march_inputs(scene, frame, steps)
+    default = bands_for(h * w * steps * count, SAMPLES_PER_BAND * numba.get_num_threads())
     report["default_bands"] = default
 
     def march(bands, out=None, per_band=None):
-        per_light, trans = out if out is not None else (np.empty((packed.count, h, w, 3)), np.empty((h, w)))
+        per_light, trans = out if out is not None else (np.empty((count, h, w, 3)), np.empty((h, w)))
         start = time.perf_counter()
         for y0, y1 in row_bands(h, bands, TILE_H):
             t = time.perf_counter()
-            march_physical(position, dirs, t_end, beta, steps, medium, packed, sm.table, None, ext, leg, per_light,
-                           trans, (np.int64(y0), np.int64(y1)))
+            march_physical(*fixed, per_light, trans, (np.int64(y0), np.int64(y1)))
             if per_band is not None:
                 per_band.append(time.perf_counter() - t)
         return time.perf_counter() - start, per_light, trans
@@ -101,8 +110,7 @@ def main(out_path: str, steps: int = 64, width: int = 1920, height: int = 1080) 
     for _ in range(3):
         t = time.perf_counter()
         for _ in range(64):
-            march_physical(position, dirs, t_end, beta, steps, medium, packed, sm.table, None, ext, leg, kept[0],
-                           kept[1], (np.int64(0), np.int64(0)))
+            march_physical(*fixed, kept[0], kept[1], (np.int64(0), np.int64(0)))
         calls.append((time.perf_counter() - t) / 64)
     report["dispatch_per_call"] = calls
     print("empty call:", [round(c * 1e6, 1) for c in calls], "us", flush=True)

@@ -9,15 +9,7 @@
 #    glibc's malloc asking for transparent huge pages (GLIBC_TUNABLES=glibc.malloc.hugetlb=1);
 set -e
 MAIN=$1 BRANCH=$2 PAIRS=${3:-4} ROUNDS=${4:-3}
-python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
-export PYTHONPATH=/tmp/site LD_LIBRARY_PATH=$PWD/.device-libs/lib:$LD_LIBRARY_PATH XDG_RUNTIME_DIR=/tmp \
-       PYTHONUNBUFFERED=1 PYTHONPYCACHEPREFIX=/tmp/pyc
-ROOT=$PWD
-SP=$(python3 -c "import numpy,os;print(os.path.dirname(os.path.dirname(numpy.__file__)))")
-STD=$(python3 -c "import sysconfig;print(sysconfig.get_paths()['stdlib'])")
-python3 -m compileall -q -j 0 $SP/numpy $SP/numba $SP/llvmlite $SP/scipy $SP/yaml $STD $ROOT/.dev/$MAIN/vlref \
-    $ROOT/.dev/$BRANCH/vlref /tmp/site > /dev/null 2>&1 || true
-lscpu | grep -E "Model name|^CPU\(s\)|Thread" ; nproc; python3 -c "import sys, numba, numpy; print(sys.version, numba.__version__, numpy.__version__)"
+source $(dirname "$0")/device_ab_env.sh
 python3 $ROOT/.dev/$BRANCH/benchmarks/whole_render_ab.py $OUT $PAIRS $ROOT/.dev/$MAIN $ROOT/.dev/$BRANCH /tmp/wrab
 for i in $(seq $ROUNDS); do
     for t in main:$MAIN:a branch:$BRANCH:b hugetlb:$BRANCH:b; do

@@ -1,7 +1,8 @@
-"""Progress band by band and clean interrupts.
+"""Progress of long kernels and clean interrupts.
 
-* The long kernels (physical march, quadrature reference) report progress once per band of rows, and the
-  bands change no bit of a result.
+* The physical march is one launch, watched: progress while it runs, a signal stops it within a tile's time, and
+  no launch is left running; the quadrature reference reports progress once per band of rows. Neither the bands
+  nor the order in which threads take tiles changes a bit of a result.
 * SIGINT / SIGTERM during every long command (render, render --frames, reference, bias, sweep, golden
   build / verify, march, bench, warmup), in this process or on a ``--scheduler local:2`` cluster: one line
   ``vlref: interrupted``, exit 130 / 143, no traceback (nor from a child process), no output folder and no
@@ -54,42 +55,90 @@ def test_row_bands_cover_the_rows_once_in_order_and_report_each_band():
         assert min(units) >= 1 and max(units) - min(units) <= 1
 
 
-def test_the_march_reports_progress_band_by_band():
-    """A march long enough to show a bar (41.5 M samples: about 1 s on 2 threads) moves it at least 10 times,
-    rows increasing; bands follow the work (``SAMPLES_PER_BAND`` per thread), not the clock."""
-    from vlref.techniques.physical import SAMPLES_PER_BAND
-
-    scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=720"])
+def test_the_march_reports_progress_while_its_one_launch_runs(monkeypatch):
+    """The march is one launch on a thread of its own (vlref.progress.watched): the calling thread reports the tasks
+    handed out so far, in rows, every POLL_S; rows increase, stay short of the total until the launch has returned,
+    and end at the total."""
+    monkeypatch.setattr(progress, "POLL_S", 0.002)
+    scene = load_scene("pillars", ["render.width=320", "render.height=180", "render.steps=200"])
     calls = []
+
+    def launching() -> bool:
+        return any(t.name == "vlref-launch" for t in threading.enumerate())
+
+    before = numba.get_num_threads()
+    numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))  # 5.8 M samples a thread: above SAMPLES_WATCHED
+    try:
+        with reporting(lambda done, total: calls.append((done, total, launching()))):
+            render(scene)
+    finally:
+        numba.set_num_threads(before)
+    assert len(calls) >= 10 and calls[-1][:2] == (180, 180)
+    assert all(total == 180 and 0 < done < 180 for done, total, _ in calls[:-1])
+    assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+    # the reports came while the launch's thread ran, the last one after it had ended
+    assert all(c[2] for c in calls[:-1]) and not calls[-1][2] and not launching()
+
+
+def test_a_signal_stops_the_march_within_a_tile_and_leaves_no_launch_running():
+    """SIGINT while the main thread waits on the march's launch (a march of tens of seconds on two threads) raises
+    KeyboardInterrupt within a fraction of a second: the counter is set past the last task, the kernel's threads end
+    with the tile they hold, and only then does the exception go on. A march right after runs as usual."""
+    scene = load_scene("pillars", ["render.width=640", "render.height=360", "render.steps=4096"])
+    calls = []
+    sent = []
+
+    def listener(done, total):
+        calls.append(done)
+        if len(calls) == 2:  # the launch is running: signal this process from another thread
+            sent.append(time.perf_counter())
+            threading.Thread(target=os.kill, args=(os.getpid(), signal.SIGINT)).start()
+
     before = numba.get_num_threads()
     numba.set_num_threads(min(2, numba.config.NUMBA_NUM_THREADS))
     try:
-        with reporting(lambda done, total: calls.append((done, total))):
+        with pytest.raises(KeyboardInterrupt), reporting(listener):
             render(scene)
-        per_band = SAMPLES_PER_BAND * numba.get_num_threads()
+        stopped = time.perf_counter() - sent[0]
+        assert not [t for t in threading.enumerate() if t.name == "vlref-launch"]
+        small = render(load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"]), stages=True)
     finally:
         numba.set_num_threads(before)
-    assert len(calls) == progress.bands_for(320 * 180 * 720, per_band) >= 10
-    assert all(total == 180 for _, total in calls) and calls[-1] == (180, 180)
-    assert all(a[0] < b[0] for a, b in zip(calls, calls[1:]))
+    # 4096 steps over 230 400 pixels: ~25 s on two threads; the stop waits for a tile (~0.5 M samples: ~0.02 s)
+    assert stopped < 1.5 and calls[-1] < 180
+    assert np.isfinite(small.buffers["final"]).all()
 
 
-def test_a_1080p_march_on_a_16_core_server_runs_in_bands_of_tens_of_milliseconds():
-    """(b) of the bench, 1920x1080x64 with four lights (531 M samples at most), on 16 threads at ~50 M samples/s a
-    thread: 10 to 20 bands, ~0.03-0.06 s each. Each band costs a launch, a tail and its pages' first touch: with
-    64 bands of 0.01 s the march took 7 % longer there than with 16."""
-    from vlref.techniques.physical import SAMPLES_PER_BAND
+def test_watched_raises_the_launchs_error_and_lets_an_exception_go_on_only_once_the_launch_has_stopped():
+    def failing():
+        raise ValueError("from the launch")
 
-    bands = progress.bands_for(1920 * 1080 * 64 * 4, SAMPLES_PER_BAND * 16)
-    assert 10 <= bands <= 20
-    assert 0.03 <= 1920 * 1080 * 64 * 4 / bands / 16 / 50e6 <= 0.06
+    with pytest.raises(ValueError, match="from the launch"):
+        progress.watched(failing, np.zeros(1, dtype=np.int64), 10, 10)
+    taken, ended = np.full(1, 100, dtype=np.int64), []  # a tenth of the tasks handed out: the listener is called
+
+    def endless():  # runs until the counter is past the last task
+        while taken[0] < 1000:
+            time.sleep(0.001)
+        ended.append(int(taken[0]))
+
+    def listener(done, total):
+        raise RuntimeError("from the listener")
+
+    with pytest.raises(RuntimeError, match="from the listener"), reporting(listener):
+        progress.watched(endless, taken, 1000, 100)
+    assert ended == [progress.EXHAUSTED]  # stopped by the counter, before the exception went on
 
 
-def test_a_small_march_runs_in_one_band():
+def test_a_small_march_runs_on_the_calling_thread_and_reports_its_end():
+    """Below SAMPLES_WATCHED per thread the march is one launch on the calling thread, no thread of its own."""
+    from vlref.techniques.physical import SAMPLES_WATCHED
+
     calls = []
-    with reporting(lambda done, total: calls.append((done, total))):
+    with reporting(lambda done, total: calls.append((done, total, [t.name for t in threading.enumerate()]))):
         render(load_scene("pillars", ["render.width=32", "render.height=18", "render.steps=8"]))
-    assert calls == [(18, 18)]
+    assert 32 * 18 * 8 < SAMPLES_WATCHED and [c[:2] for c in calls] == [(18, 18)]
+    assert "vlref-launch" not in calls[0][2]
 
 
 def test_the_reference_reports_progress_band_by_band(monkeypatch):
@@ -113,18 +162,20 @@ def test_a_small_reference_runs_in_one_band():
 @pytest.mark.parametrize("technique", ["physical", "reference"])
 def test_bands_change_no_bit(monkeypatch, technique):
     scene = load_scene("coloured_lights", ["render.width=24", "render.height=14", "render.steps=6"])
-    from vlref.techniques import physical
-
     runs = []
+    before = numba.get_num_threads()
     for bands in (1, 5):
         monkeypatch.setattr(progress, "BANDS", bands)
-        monkeypatch.setattr(physical, "SAMPLES_PER_BAND", 1)  # as many bands as BANDS allows
-        monkeypatch.setattr(quadrature, "RAYS_PER_BAND", 1)
+        monkeypatch.setattr(quadrature, "RAYS_PER_BAND", 1)  # as many bands as BANDS allows
         if technique == "reference":
             res = render_reference(scene, rel_tol=1e-2, shadow_samples=16)
             runs.append({"inscatter": res.inscatter, "transmittance": res.transmittance, "error": res.error})
-        else:
-            runs.append(render(scene, stages=True).buffers)
+        else:  # one launch (no bands): on one thread, then on two taking the tiles in another order
+            numba.set_num_threads(min(bands, 2, numba.config.NUMBA_NUM_THREADS))
+            try:
+                runs.append(render(scene, stages=True).buffers)
+            finally:
+                numba.set_num_threads(before)
     for name in runs[0]:
         assert np.array_equal(runs[0][name], runs[1][name], equal_nan=True), name
 

@@ -126,11 +126,11 @@ from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
-from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
+from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..phase import hg
 from .segments import light_segment
 
-__all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
+__all__ = ["march_physical", "march_tiles", "LANES", "TILE_W", "TILE_H"]
 
 LANES = 64  # (pixel, light) pairs per packet
 TILE_W, TILE_H = 8, 16  # a task: a tile of TILE_W x TILE_H pixels, two packets of 8 x 8 (module docstring)
@@ -647,7 +647,7 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
 
 
 def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                   per_light, transmittance, rows):
+                   per_light, transmittance, rows, taken=None):
     """Fill the rows ``rows = (first, end)`` (int64, ``first <= end <= H``) of ``per_light`` (n_lights, H, W, 3)
     and ``transmittance`` (H, W) (module docstring); the other rows are left as they are.
 
@@ -669,25 +669,37 @@ def march_physical(origin, dirs, t_end, offsets, steps, medium, lights, shadows,
     counts (:func:`vlref.parallel.borrowed`: the stages take the records on every step). The kernel
     (:func:`_march_kernel`) calls :func:`_march_tasks` by address (:func:`vlref.parallel.work`), which borrows
     them.
+
+    ``taken``: the task counter the workers take tasks from (a 1-element int64 array holding 0; a new one if None),
+    :func:`march_tiles` tasks in row-major order of tiles. The kernel releases the GIL: a caller may run it on a
+    thread of its own and read the counter meanwhile for progress, or set it past the last task to stop the march
+    after the tiles being marched (:func:`vlref.progress.watched`).
     """
+    taken = np.zeros(1, dtype=np.int64) if taken is None else taken
     args = (origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps, per_light,
-            transmittance, rows)
+            transmittance, rows, taken)
     _march_kernel(*args, work(_march_tasks, COUNTER, rows, steps, light_extinction, leg_steps, origin, dirs, t_end,
                               offsets, medium, lights, shadows, geo, per_light, transmittance))
 
 
-@njit(cache=True, fastmath=False, error_model="numpy", parallel=True)
+def march_tiles(width: int, rows: int) -> int:
+    """The tasks of :func:`march_physical` over ``rows`` rows of an image ``width`` pixels wide: its tiles."""
+    return -(-int(width) // TILE_W) * -(-int(rows) // TILE_H)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", parallel=True, nogil=True)
 def _march_kernel(origin, dirs, t_end, offsets, steps, medium, lights, shadows, geo, light_extinction, leg_steps,
-                  per_light, transmittance, rows, march_tasks):
-    """:func:`march_physical`'s parallel kernel: its checks, then workers that call ``march_tasks``
-    (:func:`_march_tasks` by address)."""
+                  per_light, transmittance, rows, taken, march_tasks):
+    """:func:`march_physical`'s parallel kernel: its checks, then workers that take tasks from ``taken`` and call
+    ``march_tasks`` (:func:`_march_tasks` by address). Without the GIL (``nogil``)."""
     if geo is None:
         for k in range(shadows.ints.shape[0]):
             if shadows.ints[k, S_MODE] == SHADOW_EXACT:
                 raise ValueError("march_physical: a light has exact shadows, and geo is None")
     if not 0 <= rows[0] <= rows[1] <= t_end.shape[0]:
         raise ValueError("march_physical: rows must satisfy 0 <= first <= end <= the image height")
-    taken = task_counter()
+    if taken.shape[0] != 1:
+        raise ValueError("march_physical: taken must hold one counter")
     for _ in prange(WORKERS):
         march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, t_end, offsets, medium, lights,
                     shadows, geo, per_light, transmittance)

@@ -19,19 +19,18 @@ import numba
 import numpy as np
 
 from ..march.patterns import offsets
-from ..march.physical import TILE_H, march_physical
+from ..march.physical import march_physical, march_tiles
 from ..medium import pack_medium
 from ..post.composite import sum_and_composite
-from ..progress import bands_for, row_bands
+from ..progress import watched
 from ..scene.technique_params import resolved
 
-__all__ = ["render", "march_buffers", "SAMPLES_PER_BAND"]
+__all__ = ["render", "march_buffers", "SAMPLES_WATCHED"]
 
-# pixel × step × light samples per band of rows (vlref.progress) and per thread: a band lasts ~0.035 s on a
-# 16-core server, ~0.1 s on a busy 2-core box. Each band is one parallel launch (~0.1 ms), a tail (threads idle
-# while its last tiles finish) and the first touch of its output pages by all threads at once: on the server 64
-# bands of 0.01 s took 0.04 s (7 %) more than 16 (BENCHMARKS.md "The march in fewer bands")
-SAMPLES_PER_BAND = 2_000_000
+# pixel × step × light samples per thread above which the march runs on a thread of its own, watched (a moving bar,
+# Ctrl-C within a tile's time: vlref.progress.watched); below, ~0.04 s on a 16-core server and ~0.1 s on a busy
+# 2-core box, it runs on the calling thread (a thread of its own cost 0.5-3.5 ms a launch on the busy dev box)
+SAMPLES_WATCHED = 2_000_000
 
 
 def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, steps: int, sampling: str):
@@ -49,19 +48,17 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     packed = lights.astype(dtype)
     per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
     trans = np.empty((h, w), dtype=dtype)
-    # The frame is marched in bands of rows (vlref.progress: a moving bar, Ctrl-C between bands), each written in
-    # place (the march takes the whole arrays and the band's rows) and made of whole tiles of the march (a band
-    # ending inside a tile left a strip of one-row tiles: packets of 8 lanes). Pixels are independent, so the
-    # bands change no bit of the result.
+    # The frame is marched in one launch, watched where it is long (SAMPLES_WATCHED)
     position = np.asarray(camera.position, dtype=dtype)
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
     # (a second, smaller kernel; vlref.march.physical.march_physical)
     traced = geo if shadow_maps.traces_rays else None
-    per_band = SAMPLES_PER_BAND * numba.get_num_threads()
+    taken = np.zeros(1, dtype=np.int64)
     args = (position, dirs, t_end, beta, int(steps), medium, packed, shadow_maps.table, traced,
-            bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light, trans)
-    for y0, y1 in row_bands(h, bands_for(h * w * int(steps) * packed.count, per_band), TILE_H):
-        march_physical(*args, (np.int64(y0), np.int64(y1)))
+            bool(scene.techniques.physical.light_extinction), int(math.ceil(math.sqrt(steps))), per_light, trans,
+            (np.int64(0), np.int64(h)), taken)
+    threaded = h * w * int(steps) * packed.count > SAMPLES_WATCHED * numba.get_num_threads()
+    watched(lambda: march_physical(*args), taken, march_tiles(w, h), h, threaded)
     return per_light, trans
 
 
