@@ -30,6 +30,9 @@ passes, :mod:`vlref.froxel.kernels`), each written once:
 * :func:`step_source_weight`: over a step of length ``Δ`` where ``σt`` is constant, a constant source ``S``
   adds ``S ∫_0^Δ e^{-σt s} ds = S (1 - e^{-σt Δ})/σt`` (``S Δ`` where ``σt = 0``) under the transmittance
   at the step's start (Hillaire 2015, "energy-conserving" integration);
+* :func:`scattered_step_fraction`: the same weight times ``σs`` where ``σs`` and ``σt`` share the density
+  factor ``ρ`` (``σs = α σt``, ``α = scattering/(scattering + absorption)`` the single-scattering albedo,
+  :func:`single_scattering_albedo`): ``σs (1 - e^{-σt Δ})/σt = α (1 - e^{-σt Δ})``, with no division per step;
 * :func:`light_leg_attenuates`: the light leg ``T_l`` (sample → light) is ``exp(-τ)`` when
   ``light_extinction`` is on and the medium extinguishes at all, except for a directional light in an
   unbounded medium, where ``T_l = 1`` (its irradiance is the irradiance arriving at the sample: an
@@ -51,6 +54,7 @@ from .numeric import cast, exp, expm1
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
            "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
            "fog_depth_ratio", "in_bounds", "box_contains", "step_source_weight", "light_leg_attenuates",
+           "single_scattering_albedo", "scattered_step_fraction",
            "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
@@ -268,6 +272,24 @@ def step_source_weight(st, delta, em1):
     over a step of length ``delta`` (module docstring). ``em1 = expm1(-σt Δ)``, which the caller computes (it
     also needs ``e^{-σt Δ} = 1 + em1`` for the transmittance update); any float type, kept."""
     return delta if st == 0.0 else -em1 / st
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def single_scattering_albedo(ss, st):
+    """``α = σs/σt`` (dimensionless, in [0, 1]) of a medium whose ``σs`` and ``σt`` share the density factor (module
+    docstring: ``ss``, ``st`` the packed ``scattering`` and ``scattering + absorption``): the fraction of the light it
+    extinguishes that it scatters. 0 where ``σt = 0`` (then ``σs = 0``: nothing scatters). Any float type, kept."""
+    return ss / st if st != 0.0 else cast(ss, 0.0)
+
+
+@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
+def scattered_step_fraction(albedo, em1):
+    """``σs ∫_0^Δ e^{-σt s} ds = α (1 - e^{-σt Δ}) = -α · em1`` (dimensionless): :func:`step_source_weight` times
+    ``σs``, for ``σs = α σt`` (``albedo`` from :func:`single_scattering_albedo`; ``em1 = expm1(-σt Δ)``). The
+    identity ``σs (1 - e^{-σt Δ})/σt = (σs/σt)(1 - e^{-σt Δ})`` is exact: the per-step division becomes one per
+    medium, and the result differs from ``σs · step_source_weight(σt, Δ, em1)`` by rounding only (a few ulps). Where
+    ``σt = 0``, ``α = 0`` and ``em1 = 0``: 0, as ``σs Δ = 0``. Any float type, kept."""
+    return -(albedo * em1)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)

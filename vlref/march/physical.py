@@ -111,20 +111,21 @@ import numpy as np
 from numba import prange
 
 from ..jit import njit
-from ..lights.attenuation import UNITY, analytic_attenuation, distance_attenuation
+from ..lights.attenuation import (UNITY, attenuation_given_inverse_square, distance_attenuation,
+                                  inverse_square_from_inverse_distance)
 from ..lights.cone import CONE_LINEAR, CONE_UNITY, cone_falloff, cone_polynomial
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
-from ..lights.shading import cookie_rgb, light_vector
+from ..lights.shading import cookie_rgb, light_vector_and_inverse
 from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map_coords, exact_visibility, map_lit,
                                     pcf_blend, pcf_taps, spot_map_coords)
 from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
                                   S_STRENGTH)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
-                      fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
-                      step_source_weight)
+                      fog_exponent, height_exponent, light_leg_attenuates, optical_depth, scattered_step_fraction,
+                      single_scattering_albedo, smooth_optical_depth)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
 from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
 from ..phase import hg
@@ -155,7 +156,7 @@ R_EM1 = 17 * LANES  # expm1(-σt Δ), Beer–Lambert over the step
 R_TO_LIGHT = 18 * LANES  # (3) l, the unit vector toward the light
 R_DIST = 21 * LANES  # the distance to the light (inf for a directional light)
 R_DIST2 = 22 * LANES  # its square
-R_E = 23 * LANES  # distance law × cone
+R_E = 23 * LANES  # distance law × cone (first the guarded inverse square 1/max(d², d_min²))
 R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
 R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
 R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
@@ -323,18 +324,19 @@ def _light_stage(s, n, lights, k):
     else:
         inv_r2 = lf[k, F_INV_RANGE2]
         px, py, pz = lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ]
-        for m in range(n):  # direction and distance
+        for m in range(n):  # direction and distance; the inverse square from the direction's one division
             x, y, z = lane3(s, R_POS, m)
-            lx, ly, lz, dist, d2 = light_vector(px, py, pz, x, y, z)
+            lx, ly, lz, dist, d2, inv = light_vector_and_inverse(px, py, pz, x, y, z)
             set_lane3(s, R_TO_LIGHT, m, lx, ly, lz)
             set_lane(s, R_DIST, m, dist)
             set_lane(s, R_DIST2, m, d2)
+            set_lane(s, R_E, m, inverse_square_from_inverse_distance(d2, inv))
         if law == UNITY and lights.lut.size > 0:  # the light's attenuation: its distance law
             for m in range(n):
                 set_lane(s, R_E, m, distance_attenuation(law, lane(s, R_DIST2, m), inv_r2, lights.lut))
         else:
             for m in range(n):
-                set_lane(s, R_E, m, analytic_attenuation(law, lane(s, R_DIST2, m), inv_r2))
+                set_lane(s, R_E, m, attenuation_given_inverse_square(law, lane(s, R_DIST2, m), lane(s, R_E, m), inv_r2))
         for m in range(n):
             set_lane(s, R_E, m, lane(s, R_E, m) if lane(s, R_DIST2, m) != zero else zero)
         if kind == KIND_SPOT:  # the cone
@@ -541,19 +543,21 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _accumulate_stage(s, n, g):
-    """The phase function and the accumulation: ``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then
-    Beer–Lambert over the step, ``T *= e^{-σt Δ}`` (module docstring; ``g`` the HG asymmetry)."""
+def _accumulate_stage(s, n, g, albedo):
+    """The phase function and the accumulation: ``L += T p(d·l) T_l α (1 - e^{-σt Δ}) · E V``, then Beer–Lambert
+    over the step, ``T *= e^{-σt Δ}`` (module docstring; ``g`` the HG asymmetry, ``albedo`` the medium's
+    :func:`~vlref.medium.single_scattering_albedo`: ``σs (1 - e^{-σt Δ})/σt`` without a division per sample,
+    :func:`~vlref.medium.scattered_step_fraction`)."""
     prefer_wide_vectors()
     zero, one = zero_one(s)
     for m in range(n):
-        st, ss, em1, delta = lane(s, R_SIGMA_T, m), lane(s, R_SIGMA_S, m), lane(s, R_EM1, m), lane(s, R_DELTA, m)
+        ss, em1 = lane(s, R_SIGMA_S, m), lane(s, R_EM1, m)
         er, eg, eb = lane3(s, R_E_RGB, m)
         dx, dy, dz = lane3(s, R_DIR, m)
         lx, ly, lz = lane3(s, R_TO_LIGHT, m)
         phase = cast(one, hg(dx * lx + dy * ly + dz * lz, g))
         t_view = lane(s, R_T_VIEW, m)
-        f = t_view * ss * phase * lane(s, R_T_LIGHT, m) * step_source_weight(st, delta, em1)
+        f = t_view * phase * lane(s, R_T_LIGHT, m) * scattered_step_fraction(albedo, em1)
         lit = scatters_light(ss, er, eg, eb)
         vr, vg, vb = lane3(s, R_VIS, m)
         lr, lg, lb = lane3(s, R_L, m)
@@ -571,6 +575,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
     g = medium.params[M_G]
+    albedo = single_scattering_albedo(medium.params[M_SS], medium.params[M_ST])
     attenuates = light_leg_attenuates(medium.params, kind == KIND_DIRECTIONAL, light_extinction)
     n_geometric = 0
     for m in range(n):
@@ -581,7 +586,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
         _light_stage(s, n, lights, k)  # the light: its direction, attenuation, cone, colour, cookie
         _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps)  # Beer–Lambert toward the light
         _shadow_stage(s, q, taps, n, shadows, geo, lights, k)  # the shadow lookup
-        _accumulate_stage(s, n, g)  # the phase function and the accumulation
+        _accumulate_stage(s, n, g, albedo)  # the phase function and the accumulation
     for m in range(n):
         i, j = pix[m] // w, pix[m] % w
         per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = lane3(s, R_L, m)
