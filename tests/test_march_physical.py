@@ -17,7 +17,7 @@ from vlref.lights.shading import light_vector_and_inverse
 from vlref.lights.shadow_pack import NSF, NSI, SHADOW_EXACT, S_MODE, ShadowMaps
 from vlref.march import physical as physical_march
 from vlref.march.physical import TILE_H, TILE_W, march_physical
-from vlref.medium import (M_ST, pack_medium, scattered_step_fraction, single_scattering_albedo,
+from vlref.medium import (M_ST, fog_depth_ratio, pack_medium, scattered_step_fraction, single_scattering_albedo,
                           step_source_weight)
 from vlref.numeric import expm1
 from vlref.phase import hg
@@ -401,14 +401,18 @@ def _ulps(dtype):
 
 @settings(max_examples=200, deadline=None)
 @given(scattering=st.one_of(st.just(0.0), st.floats(1e-3, 10.0)), absorption=st.floats(0.0, 10.0),
-       rho=st.floats(1e-12, math.exp(60.0)), delta=st.floats(1e-6, 1e3), precision=st.sampled_from(["float64", "float32"]))
-def test_the_albedo_step_weight_is_sigma_s_times_the_step_source_weight(scattering, absorption, rho, delta, precision):
+       extinction=st.booleans(), rho=st.one_of(st.just(0.0), st.floats(1e-12, math.exp(60.0))),
+       delta=st.floats(1e-6, 1e3), precision=st.sampled_from(["float64", "float32"]))
+def test_the_albedo_step_weight_is_sigma_s_times_the_step_source_weight(scattering, absorption, extinction, rho,
+                                                                        delta, precision):
+    """Without ``extinction``, a medium that scatters with σt = 0 (only tests build one): σs Δ, as before."""
     f = np.dtype(precision).type
-    ss0, st0, rho, delta = f(scattering), f(scattering) + f(absorption), f(rho), f(delta)
+    ss0, rho, delta = f(scattering), f(rho), f(delta)
+    st0 = f(scattering) + f(absorption) if extinction else f(0.0)
     ss, sigma_t = ss0 * rho, st0 * rho
     em1 = expm1(-sigma_t * delta)
     old = ss * step_source_weight(sigma_t, delta, em1)
-    new = scattered_step_fraction(single_scattering_albedo(ss0, st0), em1)
+    new = scattered_step_fraction(single_scattering_albedo(ss0, st0), em1, ss, sigma_t, delta)
     assert np.isfinite(new) and new >= 0.0
     assert abs(float(new) - float(old)) <= _ulps(precision) * abs(float(old))
     assert (new == 0.0) == (old == 0.0)
@@ -430,3 +434,17 @@ def test_the_inverse_square_from_the_inverse_distance_is_the_distance_law(light,
     assert np.isfinite(new)
     assert abs(float(new) - float(old)) <= _ulps(precision) * abs(float(old))
     assert (new == 0.0) == (old == 0.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(cos_t=st.floats(-1.0, 1.0), g=st.floats(-0.99, 0.99),
+       delta=st.one_of(st.just(0.0), st.floats(0.0, 2e-6), st.floats(0.0, 200.0), st.floats(1e36, 1e37)),
+       precision=st.sampled_from(["float64", "float32"]))
+def test_the_phase_and_the_fog_ratio_share_one_division(cos_t, g, delta, precision):
+    f = np.dtype(precision).type
+    cos_t, g, delta = f(cos_t), f(g), f(delta)
+    phase, ratio = physical_march.phase_and_fog_ratio(cos_t, g, delta)
+    old_phase, old_ratio = hg(cos_t, g), fog_depth_ratio(delta)
+    assert np.isfinite(phase) and np.isfinite(ratio) and phase > 0.0 and ratio > 0.0
+    assert abs(phase - old_phase) <= _ulps(precision) * old_phase
+    assert abs(ratio - old_ratio) <= _ulps(precision) * old_ratio
