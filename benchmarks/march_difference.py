@@ -9,36 +9,14 @@ elements where exactly one side is 0.
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc-new python3 benchmarks/march_difference.py compare before.npz
 """
 
-import dataclasses
 import sys
 
 import numpy as np
 
-from march_hashes import SIZE, VARIANTS
+from march_hashes import SIZE, buffers
 from vlref.bench.config import bench_scene
-from vlref.render import prepare_frame
 from vlref.scene.bundled import bundled_scenes
 from vlref.scene.load import load_scene
-from vlref.scene.technique_params import resolved
-from vlref.techniques.physical import march_buffers
-
-
-def buffers(scene) -> dict:
-    """``per_light`` and ``transmittance`` of ``scene`` in each variant, by key ``filter.precision.leg.buffer``."""
-    out = {}
-    for shadow_filter, precision, leg in VARIANTS:
-        varied = dataclasses.replace(
-            scene, render=dataclasses.replace(scene.render, precision=precision),
-            techniques=dataclasses.replace(scene.techniques, physical=dataclasses.replace(
-                scene.techniques.physical, light_extinction=leg)))
-        frame = prepare_frame(varied)
-        maps = frame.shadow_maps(shadow_filter)
-        per_light, trans = march_buffers(frame.scene, frame.camera, frame.gbuffer.distance, frame.lights, maps,
-                                         frame.geometry.arrays, resolved(frame.scene, "steps"),
-                                         resolved(frame.scene, "sampling"))
-        key = f"{shadow_filter}.{precision}.{'leg' if leg else 'noleg'}"
-        out[f"{key}.per_light"], out[f"{key}.transmittance"] = per_light, trans
-    return out
 
 
 def all_buffers() -> dict:
