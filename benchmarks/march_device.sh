@@ -2,7 +2,7 @@
 # The same-host alternated A/B of the march, main a776eca (.dev/main776) against this tree (.dev/i29-march), on the
 # device (BENCHMARKS.md, "The march: fewer divisions per sample"): benchmarks/march_ab.py, warm (both trees and
 # precisions side by side), then rounds of main, tree, tree, main until ROUNDS are done or BUDGET_S seconds have
-# passed. Run from the root of the checkout that carries .dev/main776, .dev/i29-march, .whl and .device-libs.
+# passed (checked before each process). Run from the root of the checkout that carries .dev/main776, .dev/i29-march, .whl and .device-libs.
 set -u
 ROOT=$PWD ROUNDS=${ROUNDS:-5} BUDGET_S=${BUDGET_S:-230}
 python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl
@@ -20,7 +20,9 @@ for label in main tree; do for p in float64 float32; do ab warm $label $p > $OUT
 wait
 echo "warm done at ${SECONDS} s"
 for r in $(seq $ROUNDS); do
-  [ $SECONDS -gt $BUDGET_S ] && { echo "stopped before round $r at ${SECONDS} s"; break; }
-  for label in main tree tree main; do ab time $label; done
+  for label in main tree tree main; do
+    [ $SECONDS -gt $BUDGET_S ] && { echo "stopped in round $r at ${SECONDS} s"; break 2; }
+    ab time $label
+  done
 done
 echo "done at ${SECONDS} s"
