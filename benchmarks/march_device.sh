@@ -1,9 +1,9 @@
 #!/bin/bash
 # The same-host alternated A/B of the march, main a776eca (.dev/main776) against this tree (.dev/i29-march), on the
-# device (BENCHMARKS.md, "The march: fewer divisions per sample"): benchmarks/march_ab.py, warm (both trees and
-# precisions side by side), then rounds of main, tree, tree, main until ROUNDS are done or BUDGET_S seconds have
-# passed (checked before each process); PRECISIONS (default both) narrows what is compiled and timed. Run from the
-# root of the checkout that carries .dev/main776, .dev/i29-march, .whl and .device-libs.
+# device (BENCHMARKS.md, "The march: fewer divisions per sample, measured, not adopted"): benchmarks/march_ab.py, warm
+# (both trees and precisions side by side), then rounds of main, tree, tree, main until ROUNDS are done or BUDGET_S
+# seconds have passed (checked before each process); PRECISIONS (default both) narrows what is compiled and timed.
+# Run from the root of the checkout that carries .dev/main776, .dev/i29-march, .whl and .device-libs.
 set -u
 ROOT=$PWD ROUNDS=${ROUNDS:-5} BUDGET_S=${BUDGET_S:-230} PRECISIONS=${PRECISIONS:-float64 float32}
 python3 -m pip install -q --no-index --no-deps --no-compile --target /tmp/site .whl/*.whl

@@ -1,7 +1,7 @@
-"""How far a change of the march moves its buffers (BENCHMARKS.md, "The march: fewer divisions per sample"): the
-physical march's ``per_light`` and ``transmittance`` of every bundled scene and the bench scenes (a) one spot and
-(b) four lights, in the variants of ``march_hashes.py`` ({pcf, hard maps} x {float64, float32} x {light leg on,
-off}), stored by one tree and compared by the other: per precision, the largest relative difference
+"""How far a change of the march moves its buffers (BENCHMARKS.md, "The march: fewer divisions per sample, measured,
+not adopted"): the physical march's ``per_light`` and ``transmittance`` of every bundled scene and the bench scenes
+(a) one spot and (b) four lights, in the variants of ``march_hashes.py`` ({pcf, hard maps} x {float64, float32} x
+{light leg on, off}), stored by one tree and compared by the other: per precision, the largest relative difference
 ``|new - old| / |old|`` over the elements (the march's sums are of non-negative terms: no cancellation), and the
 elements where exactly one side is 0.
 

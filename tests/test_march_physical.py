@@ -11,15 +11,10 @@ from hypothesis import given, settings, strategies as st
 from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
-from vlref.lights.attenuation import (ATTENUATION_CODES, analytic_attenuation, attenuation_given_inverse_square,
-                                      inverse_square_from_inverse_distance)
-from vlref.lights.shading import light_vector_and_inverse
 from vlref.lights.shadow_pack import NSF, NSI, SHADOW_EXACT, S_MODE, ShadowMaps
 from vlref.march import physical as physical_march
 from vlref.march.physical import TILE_H, TILE_W, march_physical
-from vlref.medium import (M_ST, fog_depth_ratio, pack_medium, scattered_step_fraction, single_scattering_albedo,
-                          step_source_weight)
-from vlref.numeric import expm1
+from vlref.medium import M_ST, pack_medium
 from vlref.phase import hg
 from vlref.scene.model import (Bounds, CameraSettings, HeightFog, Light, Medium, Noise,
                                RenderSettings, Scene)
@@ -391,60 +386,3 @@ def test_the_packet_scratch_rows_tile_the_scratch_without_overlap():
     lanes = physical_march.LANES
     cells = sorted(off + k * lanes for name, off in rows.items() for k in range(3 if name in triple else 1))
     assert cells == list(range(0, physical_march.ROWS * lanes, lanes))
-
-
-# The march's divisions removed by exact algebra (module docstring, "Performance"): each new form against the
-# formula it replaces, to a few ulps of the march's float type.
-def _ulps(dtype):
-    return 4.0 * float(np.finfo(dtype).eps)
-
-
-@settings(max_examples=200, deadline=None)
-@given(scattering=st.one_of(st.just(0.0), st.floats(1e-3, 10.0)), absorption=st.floats(0.0, 10.0),
-       extinction=st.booleans(), rho=st.one_of(st.just(0.0), st.floats(1e-12, math.exp(60.0))),
-       delta=st.floats(1e-6, 1e3), precision=st.sampled_from(["float64", "float32"]))
-def test_the_albedo_step_weight_is_sigma_s_times_the_step_source_weight(scattering, absorption, extinction, rho,
-                                                                        delta, precision):
-    """Without ``extinction``, a medium that scatters with σt = 0 (only tests build one): σs Δ, as before."""
-    f = np.dtype(precision).type
-    ss0, rho, delta = f(scattering), f(rho), f(delta)
-    st0 = f(scattering) + f(absorption) if extinction else f(0.0)
-    ss, sigma_t = ss0 * rho, st0 * rho
-    em1 = expm1(-sigma_t * delta)
-    old = ss * step_source_weight(sigma_t, delta, em1)
-    new = scattered_step_fraction(single_scattering_albedo(ss0, st0), em1, ss, sigma_t, delta)
-    assert np.isfinite(new) and new >= 0.0
-    assert abs(float(new) - float(old)) <= _ulps(precision) * abs(float(old))
-    assert (new == 0.0) == (old == 0.0)
-
-
-@settings(max_examples=200, deadline=None)
-@given(light=st.tuples(*[st.floats(-50.0, 50.0)] * 3), offset=st.tuples(*[st.floats(-30.0, 30.0)] * 3),
-       scale=st.sampled_from([1.0, 1e-2, 1e-3]), law=st.sampled_from(["inverse_square", "windowed", "unity"]),
-       light_range=st.floats(0.01, 100.0), precision=st.sampled_from(["float64", "float32"]))
-def test_the_inverse_square_from_the_inverse_distance_is_the_distance_law(light, offset, scale, law, light_range,
-                                                                          precision):
-    f = np.dtype(precision).type
-    p = [f(c) for c in light]
-    x = [f(c + scale * o) for c, o in zip(light, offset)]
-    _, _, _, dist, d2, inv = light_vector_and_inverse(*p, *x)
-    code, inv_r2 = ATTENUATION_CODES[law], f(1.0 / (light_range * light_range))
-    old = analytic_attenuation(code, d2, inv_r2)
-    new = attenuation_given_inverse_square(code, d2, inverse_square_from_inverse_distance(d2, inv), inv_r2)
-    assert np.isfinite(new)
-    assert abs(float(new) - float(old)) <= _ulps(precision) * abs(float(old))
-    assert (new == 0.0) == (old == 0.0)
-
-
-@settings(max_examples=300, deadline=None)
-@given(cos_t=st.floats(-1.0, 1.0), g=st.floats(-0.99, 0.99),
-       delta=st.one_of(st.just(0.0), st.floats(0.0, 2e-6), st.floats(0.0, 200.0), st.floats(1e36, 1e37)),
-       precision=st.sampled_from(["float64", "float32"]))
-def test_the_phase_and_the_fog_ratio_share_one_division(cos_t, g, delta, precision):
-    f = np.dtype(precision).type
-    cos_t, g, delta = f(cos_t), f(g), f(delta)
-    phase, ratio = physical_march.phase_and_fog_ratio(cos_t, g, delta)
-    old_phase, old_ratio = hg(cos_t, g), fog_depth_ratio(delta)
-    assert np.isfinite(phase) and np.isfinite(ratio) and phase > 0.0 and ratio > 0.0
-    assert abs(phase - old_phase) <= _ulps(precision) * old_phase
-    assert abs(ratio - old_ratio) <= _ulps(precision) * old_ratio

@@ -30,9 +30,6 @@ passes, :mod:`vlref.froxel.kernels`), each written once:
 * :func:`step_source_weight`: over a step of length ``Δ`` where ``σt`` is constant, a constant source ``S``
   adds ``S ∫_0^Δ e^{-σt s} ds = S (1 - e^{-σt Δ})/σt`` (``S Δ`` where ``σt = 0``) under the transmittance
   at the step's start (Hillaire 2015, "energy-conserving" integration);
-* :func:`scattered_step_fraction`: the same weight times ``σs`` where ``σs`` and ``σt`` share the density
-  factor ``ρ`` (``σs = α σt``, ``α = scattering/(scattering + absorption)`` the single-scattering albedo,
-  :func:`single_scattering_albedo`): ``σs (1 - e^{-σt Δ})/σt = α (1 - e^{-σt Δ})``, with no division per step;
 * :func:`light_leg_attenuates`: the light leg ``T_l`` (sample → light) is ``exp(-τ)`` when
   ``light_extinction`` is on and the medium extinguishes at all, except for a directional light in an
   unbounded medium, where ``T_l = 1`` (its irradiance is the irradiance arriving at the sample: an
@@ -53,12 +50,10 @@ from .numeric import cast, exp, expm1
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
            "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
-           "fog_depth_ratio", "fog_depth_ratio_given_inverse", "in_bounds", "box_contains", "step_source_weight",
-           "light_leg_attenuates", "single_scattering_albedo", "scattered_step_fraction", "FOG_MAX_EXPONENT",
-           "FOG_SERIES_BELOW"]
+           "fog_depth_ratio", "in_bounds", "box_contains", "step_source_weight", "light_leg_attenuates",
+           "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
-FOG_SERIES_BELOW = 1e-6  # fog_depth_ratio's series below this δ
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
  M_NSCALE, M_NINT, M_NOFF, M_NSX, M_NSY, M_NSZ) = range(20)
 NM = 20
@@ -166,22 +161,11 @@ def in_bounds(mp, x, y, z):
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def fog_depth_ratio(delta):
-    """``(1 - e^{-δ})/δ`` for ``δ = |e_a - e_b| >= 0`` (``1 - δ/2`` below ``FOG_SERIES_BELOW = 1e-6``): the
-    height-fog optical depth of a segment is ``σt · L · e^{max(e_a, e_b)}`` times this."""
-    return _fog_ratio_series_below(delta, -expm1(-delta) / delta)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def fog_depth_ratio_given_inverse(delta, inv_delta):
-    """:func:`fog_depth_ratio` with its division given by the caller, ``inv_delta = 1/δ`` (used from
-    ``FOG_SERIES_BELOW`` up): ``(1 - e^{-δ}) · (1/δ)``, the same ratio up to rounding (one more, half an ulp)."""
-    return _fog_ratio_series_below(delta, -expm1(-delta) * inv_delta)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def _fog_ratio_series_below(delta, ratio):
-    """``ratio`` from ``FOG_SERIES_BELOW`` up; below, the series ``1 - δ/2`` (where ``ratio`` loses digits)."""
-    return cast(delta, 1.0) - cast(delta, 0.5) * delta if delta < cast(delta, FOG_SERIES_BELOW) else ratio
+    """``(1 - e^{-δ})/δ`` for ``δ = |e_a - e_b| >= 0`` (``1 - δ/2`` below 1e-6): the height-fog optical
+    depth of a segment is ``σt · L · e^{max(e_a, e_b)}`` times this."""
+    if delta < cast(delta, 1e-6):
+        return cast(delta, 1.0) - cast(delta, 0.5) * delta
+    return -expm1(-delta) / delta
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
@@ -284,25 +268,6 @@ def step_source_weight(st, delta, em1):
     over a step of length ``delta`` (module docstring). ``em1 = expm1(-σt Δ)``, which the caller computes (it
     also needs ``e^{-σt Δ} = 1 + em1`` for the transmittance update); any float type, kept."""
     return delta if st == 0.0 else -em1 / st
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def single_scattering_albedo(ss, st):
-    """``α = σs/σt`` (dimensionless, in [0, 1]) of a medium whose ``σs`` and ``σt`` share the density factor (module
-    docstring: ``ss``, ``st`` the packed ``scattering`` and ``scattering + absorption``): the fraction of the light it
-    extinguishes that it scatters. 0 where ``σt = 0`` (then ``σs = 0``: nothing scatters). Any float type, kept."""
-    return ss / st if st != 0.0 else cast(ss, 0.0)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def scattered_step_fraction(albedo, em1, ss, st, delta):
-    """``σs ∫_0^Δ e^{-σt s} ds = α (1 - e^{-σt Δ}) = -α · em1`` (dimensionless): :func:`step_source_weight` times
-    ``σs``, for ``σs = α σt`` (``albedo`` from :func:`single_scattering_albedo`; ``em1 = expm1(-σt Δ)``; ``ss``,
-    ``st`` the sample's ``σs``, ``σt``). The identity ``σs (1 - e^{-σt Δ})/σt = (σs/σt)(1 - e^{-σt Δ})`` is exact:
-    the per-step division becomes one per medium, and the result differs from ``σs · step_source_weight(σt, Δ,
-    em1)`` by rounding only (a few ulps). Where ``σt = 0``, ``σs Δ`` as there (0 in a scene's medium, where
-    ``σt = 0`` means ``σs = 0``; a test's medium may scatter without extinction). Any float type, kept."""
-    return ss * delta if st == 0.0 else -(albedo * em1)
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)

@@ -22,21 +22,9 @@ INV_4PI = 1.0 / (4.0 * math.pi)
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def hg(cos_theta, g):
     """Henyey-Greenstein phase value (1/sr) for one cosine, in the precision of ``g``; valid for |g| < 1."""
-    return hg_numerator(g) / hg_denominator(cos_theta, g)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def hg_numerator(g):
-    """``(1 - g²)/(4π)`` (1/sr), :func:`hg`'s numerator: a constant of the medium."""
-    return cast(g, INV_4PI) * (cast(g, 1.0) - g * g)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def hg_denominator(cos_theta, g):
-    """``(1 + g² - 2 g cos θ)^{3/2}`` (dimensionless, in ``[(1 - |g|)³, (1 + |g|)³]``), :func:`hg`'s denominator,
-    for a caller that merges its division with another (the physical march)."""
-    denom = cast(g, 1.0) + g * g - cast(g, 2.0) * g * cos_theta
-    return denom * math.sqrt(denom)
+    one = cast(g, 1.0)
+    denom = one + g * g - cast(g, 2.0) * g * cos_theta
+    return cast(g, INV_4PI) * (one - g * g) / (denom * math.sqrt(denom))
 
 
 def hg_array(cos_theta, g):

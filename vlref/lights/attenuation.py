@@ -28,8 +28,7 @@ from ..scene.model import ATTENUATIONS
 from .cookies import filter_taps
 
 __all__ = ["ATTENUATION_CODES", "INVERSE_SQUARE", "UNITY", "WINDOWED", "MIN_DISTANCE",
-           "analytic_attenuation", "attenuation_given_inverse_square", "distance_attenuation",
-           "inverse_square_from_inverse_distance", "unity_folk", "unity_lut_lookup"]
+           "analytic_attenuation", "distance_attenuation", "unity_folk", "unity_lut_lookup"]
 
 ATTENUATION_CODES = {name: code for code, name in enumerate(ATTENUATIONS)}
 """The code of each distance law, its index in the scene model's one list :data:`vlref.scene.model.ATTENUATIONS`
@@ -65,34 +64,17 @@ def unity_lut_lookup(lut, u):
 def analytic_attenuation(law, d2, inv_range2):
     """:func:`distance_attenuation` for the laws given by a formula (every law but ``unity`` with a LUT): no
     table, no call, so the march's lane loops vectorise over it."""
-    return attenuation_given_inverse_square(law, d2, cast(d2, 1.0) / max(d2, cast(d2, MIN_DISTANCE * MIN_DISTANCE)),
-                                            inv_range2)
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def attenuation_given_inverse_square(law, d2, inv_square, inv_range2):
-    """:func:`analytic_attenuation` with its guarded inverse square ``inv_square = 1/max(d², d_min²)`` (1/m²) given
-    by the caller (:func:`inverse_square_from_inverse_distance`, or the division itself)."""
     u = d2 * inv_range2
     one = cast(d2, 1.0)
     if u >= one:
         return cast(d2, 0.0)
     if law == UNITY:
         return unity_folk(u)
+    inv = one / max(d2, cast(d2, MIN_DISTANCE * MIN_DISTANCE))
     if law == WINDOWED:
         w = one - u * u
-        return w * w * inv_square
-    return inv_square
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def inverse_square_from_inverse_distance(d2, inv_dist):
-    """The guarded inverse square ``1/max(d², d_min²)`` (1/m²) from the inverse distance ``inv_dist = 1/d``
-    (``d = sqrt(d2)``), which a caller that normalises the direction to the light has already divided:
-    ``1/d² = (1/d)²`` for ``d² >= d_min²`` (exact algebra: no division, and the product differs from ``1/d²`` by
-    rounding only, at most 2 ulps), the constant ``1/d_min²`` below."""
-    floor2 = cast(d2, MIN_DISTANCE * MIN_DISTANCE)
-    return inv_dist * inv_dist if d2 >= floor2 else cast(d2, 1.0) / floor2
+        return w * w * inv
+    return inv
 
 
 @njit(cache=True, fastmath=False)

@@ -42,8 +42,7 @@ from .pack import (F_CB, F_CG, F_CK_SIZE, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, 
                    KIND_DIRECTIONAL, KIND_SPOT, PackedLights)
 from .shadow_lookup import apply_strength
 
-__all__ = ["light_incidence", "light_vector", "light_vector_and_inverse", "cookie_rgb", "scene_colour",
-           "SURFACE_OFFSET"]
+__all__ = ["light_incidence", "light_vector", "cookie_rgb", "scene_colour", "SURFACE_OFFSET"]
 
 SURFACE_OFFSET = 1e-4
 
@@ -53,19 +52,11 @@ def light_vector(px, py, pz, x, y, z):
     """``(lx, ly, lz, dist, d2)``: the unit vector from ``(x, y, z)`` toward a light at ``(px, py, pz)``, the
     distance and its square; ``l = 0`` at the light's own position. Scalars only (no array: called in the
     march's vectorised lane loops)."""
-    lx, ly, lz, dist, d2, _ = light_vector_and_inverse(px, py, pz, x, y, z)
-    return lx, ly, lz, dist, d2
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def light_vector_and_inverse(px, py, pz, x, y, z):
-    """:func:`light_vector` and the inverse distance ``1/dist`` it normalises by (1 at the light's own position),
-    for a caller that reuses the one division (the physical march's distance law)."""
     wx, wy, wz = px - x, py - y, pz - z
     d2 = wx * wx + wy * wy + wz * wz
     dist = math.sqrt(d2)
     inv = cast(x, 1.0) / dist if d2 > cast(x, 0.0) else cast(x, 1.0)
-    return wx * inv, wy * inv, wz * inv, dist, d2, inv
+    return wx * inv, wy * inv, wz * inv, dist, d2
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

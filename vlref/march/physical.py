@@ -40,10 +40,10 @@ The stages of one step, each a function below, in the order they run (:func:`_ma
                          ``expm1(-σt Δ)``
 :func:`_light_stage`     the light: direction ``l`` and distance, distance law × cone (its attenuation and
                          cone), colour and cookie: ``E_l``
-:func:`_leg_stage`       the light leg ``T_l``: Beer–Lambert from the sample to the light; the phase function
-                         ``p(d·l)``
+:func:`_leg_stage`       the light leg ``T_l``: Beer–Lambert from the sample to the light
 :func:`_shadow_stage`    the shadow lookup ``V`` (map or shadow ray, the light's strength applied)
-:func:`_accumulate_stage` the accumulation ``L += T S_int``, ``T *= e^{-σt Δ}``
+:func:`_accumulate_stage` the phase function ``p(d·l)`` and the accumulation ``L += T S_int``,
+                         ``T *= e^{-σt Δ}``
 =======================  ===============================================================================
 
 Order of convergence in ``Δ`` (smooth integrand): the per-step source is a rectangle rule at offset
@@ -60,21 +60,8 @@ Determinism: threads take tasks, tiles of pixels (:mod:`vlref.parallel`), each t
 no cross-pixel reduction; a lane's arithmetic does not depend on the other lanes of its packet: the same
 bits for any thread count and any order in which the tasks are taken.
 
-Performance (how the sum above is evaluated; none of it changes a bit but "Fewer divisions", which changes the
-last bits; BENCHMARKS.md "Packets of rays", "Tiles, Estrin's `exp`, a tighter PCF loop", "Scheduling, borrowed
-records, a leaner compile", "The march: fewer divisions per sample"):
-
-* Fewer divisions: three identities of exact algebra take three of a sample's six divisions away (those that
-  remain: the direction's ``1/dist``, one for the phase function and the fog leg together, the spot map's
-  projection). The step weight ``σs (1 - e^{-σt Δ})/σt = α (1 - e^{-σt Δ})`` with the single-scattering albedo
-  ``α = σs/σt``, a constant of the medium (:func:`vlref.medium.scattered_step_fraction`); the distance law's
-  ``1/d² = (1/d)²`` from the direction's ``1/d``
-  (:func:`vlref.lights.attenuation.inverse_square_from_inverse_distance`); in a noiseless unbounded height fog,
-  the phase function's ``1/D`` and the fog leg's ``1/δ`` from one ``1/(D δ)`` (:func:`phase_and_fog_ratio`).
-  Each differs from its division by rounding only: the march's buffers
-  moved by at most 7.4e-16 (float64) and 3.8e-7 (float32) relative over the bundled scenes and the bench scenes
-  (``benchmarks/march_difference.py``); the shadow maps' depth comparisons keep their bits (the distance is
-  still ``sqrt(d²)``).
+Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARKS.md "Packets of rays",
+"Tiles, Estrin's `exp`, a tighter PCF loop", "Scheduling, borrowed records, a leaner compile"):
 
 * Packets: the rays are marched in packets of up to ``LANES`` (pixel, light) pairs that share a light;
   every pair takes exactly ``N`` steps, so the lanes of a packet stay in lockstep. A task is a tile of
@@ -115,7 +102,10 @@ records, a leaner compile", "The march: fewer divisions per sample"):
   loop over all ``LANES`` lanes (a constant trip count), the spot map's coordinates and reads in one loop. None was
   faster; what binds the march is the float64 work per sample, which the float32 mode does not narrow (``exp`` and
   ``expm1`` in float64, the map coordinates and texels in float64, the same quotients and roots), and the gathers'
-  wait on the memory (about a tenth of the time on Zen 4).
+  wait on the memory (about a tenth of the time on Zen 4). Three of a sample's six divisions taken away by exact
+  algebra (BENCHMARKS.md "The march: fewer divisions per sample, measured, not adopted": the albedo ``σs/σt`` per
+  medium, ``1/d² = (1/d)²``, the phase function's and the fog leg's divisions as one) moved the last bits and
+  bought nothing on the device: the divider does not bind the march either.
 """
 
 from __future__ import annotations
@@ -124,24 +114,23 @@ import numpy as np
 from numba import prange
 
 from ..jit import njit
-from ..lights.attenuation import (UNITY, attenuation_given_inverse_square, distance_attenuation,
-                                  inverse_square_from_inverse_distance)
+from ..lights.attenuation import UNITY, analytic_attenuation, distance_attenuation
 from ..lights.cone import CONE_LINEAR, CONE_UNITY, cone_falloff, cone_polynomial
 from ..lights.pack import (F_CB, F_CG, F_COS_INNER, F_COS_OUTER, F_CR, F_DX, F_DY, F_DZ, F_HALF_INNER, F_HALF_OUTER,
                            F_INV_RANGE2, F_PX, F_PY, F_PZ, F_RX, F_RY, F_RZ, F_TAN_HALF, F_UNITY_A, F_UNITY_B, F_UX, F_UY,
                            F_UZ, I_ATT, I_CK_OFF, I_CONE, I_KIND, KIND_DIRECTIONAL, KIND_SPOT)
-from ..lights.shading import cookie_rgb, light_vector_and_inverse
+from ..lights.shading import cookie_rgb, light_vector
 from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map_coords, exact_visibility, map_lit,
                                     pcf_blend, pcf_taps, spot_map_coords)
 from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
                                   S_STRENGTH)
-from ..medium import (FOG_MAX_EXPONENT, FOG_SERIES_BELOW, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG,
-                      M_FOG_BASE, M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density,
-                      fog_depth_ratio_given_inverse, fog_exponent, height_exponent, light_leg_attenuates, optical_depth,
-                      scattered_step_fraction, single_scattering_albedo, smooth_optical_depth)
+from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
+                      M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
+                      fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
+                      step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
 from ..parallel import COUNTER, WORKERS, borrowed, take, task_counter, work
-from ..phase import hg, hg_denominator, hg_numerator
+from ..phase import hg
 from .segments import light_segment
 
 __all__ = ["march_physical", "LANES", "TILE_W", "TILE_H"]
@@ -151,7 +140,7 @@ TILE_W, TILE_H = 8, 16  # a task: a tile of TILE_W x TILE_H pixels, two packets 
 
 # The packet's scratch (module docstring, "Lanes"): lane m of row R is scratch[R + m]. A row named for a
 # vector or a colour is the first of three consecutive rows, (x, y, z) or (r, g, b).
-ROWS = 36
+ROWS = 35
 R_START = 0 * LANES  # a, the segment's start
 R_DELTA = 1 * LANES  # b, the segment's end, until _setup replaces it by the step Δ = (b - a)/N
 R_BETA = 2 * LANES  # β, the pixel's sample offset in [0, 1)
@@ -169,13 +158,12 @@ R_EM1 = 17 * LANES  # expm1(-σt Δ), Beer–Lambert over the step
 R_TO_LIGHT = 18 * LANES  # (3) l, the unit vector toward the light
 R_DIST = 21 * LANES  # the distance to the light (inf for a directional light)
 R_DIST2 = 22 * LANES  # its square
-R_E = 23 * LANES  # distance law × cone (first the guarded inverse square 1/max(d², d_min²))
+R_E = 23 * LANES  # distance law × cone
 R_E_RGB = 24 * LANES  # (3) E_l: × colour × cookie
 R_T_LIGHT = 27 * LANES  # T_l, the light leg's transmittance
 R_VIS = 28 * LANES  # (3) V, the shadow visibility per channel
 R_L = 31 * LANES  # (3) L, the radiance scattered toward the eye so far
 R_COS = 34 * LANES  # cos θ = -l · (the spot's axis), the cone's argument
-R_PHASE = 35 * LANES  # p(d·l), the phase function
 # float64 rows of a PCF map lookup (as map_lit computes them): the sample's map coordinates (u, v; cascades only)
 # and depth, whether the map covers it (in front of a spot light, on a cube face, inside a cascade), the four texel
 # weights, the lit fraction; the uint64 rows of ``taps``: the cascade's first texel, then the four texel offsets
@@ -338,19 +326,18 @@ def _light_stage(s, n, lights, k):
     else:
         inv_r2 = lf[k, F_INV_RANGE2]
         px, py, pz = lf[k, F_PX], lf[k, F_PY], lf[k, F_PZ]
-        for m in range(n):  # direction and distance; the inverse square from the direction's one division
+        for m in range(n):  # direction and distance
             x, y, z = lane3(s, R_POS, m)
-            lx, ly, lz, dist, d2, inv = light_vector_and_inverse(px, py, pz, x, y, z)
+            lx, ly, lz, dist, d2 = light_vector(px, py, pz, x, y, z)
             set_lane3(s, R_TO_LIGHT, m, lx, ly, lz)
             set_lane(s, R_DIST, m, dist)
             set_lane(s, R_DIST2, m, d2)
-            set_lane(s, R_E, m, inverse_square_from_inverse_distance(d2, inv))
         if law == UNITY and lights.lut.size > 0:  # the light's attenuation: its distance law
             for m in range(n):
                 set_lane(s, R_E, m, distance_attenuation(law, lane(s, R_DIST2, m), inv_r2, lights.lut))
         else:
             for m in range(n):
-                set_lane(s, R_E, m, attenuation_given_inverse_square(law, lane(s, R_DIST2, m), lane(s, R_E, m), inv_r2))
+                set_lane(s, R_E, m, analytic_attenuation(law, lane(s, R_DIST2, m), inv_r2))
         for m in range(n):
             set_lane(s, R_E, m, lane(s, R_E, m) if lane(s, R_DIST2, m) != zero else zero)
         if kind == KIND_SPOT:  # the cone
@@ -393,66 +380,28 @@ def _light_stage(s, n, lights, k):
 def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
     """The light leg ``T_l``, Beer–Lambert from the sample to the light (module docstring): 1 unless the leg
     ``attenuates`` (:func:`~vlref.medium.light_leg_attenuates`), else the height fog's closed form or
-    :func:`~vlref.medium.optical_depth`; and the phase function ``p(d·l)``, which the fog's closed form divides
-    with (:func:`_fog_leg_and_phase`)."""
+    :func:`~vlref.medium.optical_depth`."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     zero, one = zero_one(s)
-    g = mp[M_G]
+    st0 = mp[M_ST]
     bounded, noise = mp[M_BOUNDED] != zero, mp[M_NOISE] != zero
-    if attenuates and mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
-        _fog_leg_and_phase(s, n, mp, light_y)
-        return
-    for m in range(n):
-        dx, dy, dz = lane3(s, R_DIR, m)
-        lx, ly, lz = lane3(s, R_TO_LIGHT, m)
-        set_lane(s, R_PHASE, m, cast(one, hg(dx * lx + dy * ly + dz * lz, g)))
     if not attenuates:
         for m in range(n):
             set_lane(s, R_T_LIGHT, m, one)
+    elif mp[M_FOG] != zero and not noise and not bounded and kind != KIND_DIRECTIONAL:
+        el = height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], light_y)  # the leg ends at the light
+        fog_l = exp(el)
+        for m in range(n):
+            dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
+            top = rho if ea >= el else fog_l
+            set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el)))))
     else:
         for m in range(n):
             x, y, z = lane3(s, R_POS, m)
             lx, ly, lz = lane3(s, R_TO_LIGHT, m)
             set_lane(s, R_T_LIGHT, m, exp(-optical_depth(mp, lattice, x, y, z, lx, ly, lz, zero, lane(s, R_DIST, m),
                                                          leg_steps)))
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", inline="always")
-def phase_and_fog_ratio(cos_t, g, delta):
-    """``(p, ρ_fog)``: the phase function ``p = K/D`` (:func:`~vlref.phase.hg`, ``K`` its
-    :func:`~vlref.phase.hg_numerator`, ``D`` its :func:`~vlref.phase.hg_denominator`) and the height fog's
-    :func:`~vlref.medium.fog_depth_ratio` ``(1 - e^{-δ})/δ``, with one division for the two: ``r = 1/(D δ')``,
-    ``1/D = δ' r``, ``1/δ = c D r``, ``δ' = c δ``. Exact algebra: each differs from its own division by rounding
-    only (a few ulps). ``c = 2⁻²⁰`` above ``δ = 2¹²⁰`` (else 1) keeps ``D δ' <= 8 δ'`` finite in float32, and
-    ``D >= (1 - |g|)³``, ``δ' >= 1e-6`` keep it off 0; below ``FOG_SERIES_BELOW`` the ratio is its series (no
-    ``1/δ``) and ``δ' = 1``. In the float type of ``g``."""
-    one = cast(g, 1.0)
-    d = hg_denominator(cos_t, g)
-    c = cast(g, 2.0 ** -20) if delta > cast(g, 2.0 ** 120) else one
-    scaled = (delta if delta >= cast(g, FOG_SERIES_BELOW) else one) * c
-    r = one / (d * scaled)
-    return hg_numerator(g) * (scaled * r), fog_depth_ratio_given_inverse(delta, c * (d * r))
-
-
-@njit(cache=True, fastmath=False, error_model="numpy")
-def _fog_leg_and_phase(s, n, mp, light_y):
-    """The light leg in a noiseless, unbounded height fog toward a point or spot light (the closed form of
-    :func:`~vlref.medium.optical_depth`, the sample's fog factor reused for the larger end),
-    ``T_l = exp(-σt0 · dist · e^{max(e_a, e_l)} · (1 - e^{-δ})/δ)`` with ``δ = |e_a - e_l|``, and the phase
-    function: one division for the two (:func:`phase_and_fog_ratio`)."""
-    prefer_wide_vectors()
-    st0, g = mp[M_ST], mp[M_G]
-    el = height_exponent(mp[M_FOG_BASE], mp[M_FOG_K], light_y)  # the leg ends at the light
-    fog_l = exp(el)
-    for m in range(n):
-        dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
-        dx, dy, dz = lane3(s, R_DIR, m)
-        lx, ly, lz = lane3(s, R_TO_LIGHT, m)
-        top = rho if ea >= el else fog_l
-        phase, ratio = phase_and_fog_ratio(dx * lx + dy * ly + dz * lz, g, abs(ea - el))
-        set_lane(s, R_PHASE, m, phase)
-        set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * ratio)))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
@@ -595,19 +544,19 @@ def _shadow_stage(s, q, taps, n, shadows, geo, lights, k):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _accumulate_stage(s, n, albedo):
-    """The accumulation: ``L += T p(d·l) T_l α (1 - e^{-σt Δ}) · E V``, then Beer–Lambert over the step,
-    ``T *= e^{-σt Δ}`` (module docstring; ``p`` from :func:`_leg_stage`, ``albedo`` the medium's
-    :func:`~vlref.medium.single_scattering_albedo`: ``σs (1 - e^{-σt Δ})/σt`` without a division per sample,
-    :func:`~vlref.medium.scattered_step_fraction`)."""
+def _accumulate_stage(s, n, g):
+    """The phase function and the accumulation: ``L += T σs p(d·l) T_l (1 - e^{-σt Δ})/σt · E V``, then
+    Beer–Lambert over the step, ``T *= e^{-σt Δ}`` (module docstring; ``g`` the HG asymmetry)."""
     prefer_wide_vectors()
     zero, one = zero_one(s)
     for m in range(n):
-        ss, st, em1 = lane(s, R_SIGMA_S, m), lane(s, R_SIGMA_T, m), lane(s, R_EM1, m)
+        st, ss, em1, delta = lane(s, R_SIGMA_T, m), lane(s, R_SIGMA_S, m), lane(s, R_EM1, m), lane(s, R_DELTA, m)
         er, eg, eb = lane3(s, R_E_RGB, m)
+        dx, dy, dz = lane3(s, R_DIR, m)
+        lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+        phase = cast(one, hg(dx * lx + dy * ly + dz * lz, g))
         t_view = lane(s, R_T_VIEW, m)
-        weight = scattered_step_fraction(albedo, em1, ss, st, lane(s, R_DELTA, m))
-        f = t_view * lane(s, R_PHASE, m) * lane(s, R_T_LIGHT, m) * weight
+        f = t_view * ss * phase * lane(s, R_T_LIGHT, m) * step_source_weight(st, delta, em1)
         lit = scatters_light(ss, er, eg, eb)
         vr, vg, vb = lane3(s, R_VIS, m)
         lr, lg, lb = lane3(s, R_L, m)
@@ -624,7 +573,7 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     prefer_wide_vectors()
     kind = lights.ints[k, I_KIND]
     light_y = lights.floats[k, F_PY]
-    albedo = single_scattering_albedo(medium.params[M_SS], medium.params[M_ST])
+    g = medium.params[M_G]
     attenuates = light_leg_attenuates(medium.params, kind == KIND_DIRECTIONAL, light_extinction)
     n_geometric = 0
     for m in range(n):
@@ -633,9 +582,9 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
     for i in range(steps):
         _medium_stage(s, n, i, origin, medium, geometric)  # the medium: σs, σt, Beer–Lambert over the step
         _light_stage(s, n, lights, k)  # the light: its direction, attenuation, cone, colour, cookie
-        _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps)  # Beer–Lambert toward the light, the phase
+        _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps)  # Beer–Lambert toward the light
         _shadow_stage(s, q, taps, n, shadows, geo, lights, k)  # the shadow lookup
-        _accumulate_stage(s, n, albedo)  # the accumulation
+        _accumulate_stage(s, n, g)  # the phase function and the accumulation
     for m in range(n):
         i, j = pix[m] // w, pix[m] % w
         per_light[k, i, j, 0], per_light[k, i, j, 1], per_light[k, i, j, 2] = lane3(s, R_L, m)
