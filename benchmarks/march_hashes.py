@@ -33,8 +33,8 @@ def _digest(array: np.ndarray) -> str:
     return hashlib.sha256(np.ascontiguousarray(array).tobytes()).hexdigest()[:16]
 
 
-def hashes(scene) -> dict:
-    """Digest of ``per_light`` and ``transmittance`` of ``scene`` in each variant."""
+def buffers(scene) -> dict:
+    """``per_light`` and ``transmittance`` of ``scene`` in each variant, by key ``filter.precision.leg.buffer``."""
     out = {}
     for shadow_filter, precision, leg in VARIANTS:
         varied = dataclasses.replace(
@@ -47,8 +47,13 @@ def hashes(scene) -> dict:
                                          frame.geometry.arrays, resolved(frame.scene, "steps"),
                                          resolved(frame.scene, "sampling"))
         key = f"{shadow_filter}.{precision}.{'leg' if leg else 'noleg'}"
-        out[f"{key}.per_light"], out[f"{key}.transmittance"] = _digest(per_light), _digest(trans)
+        out[f"{key}.per_light"], out[f"{key}.transmittance"] = per_light, trans
     return out
+
+
+def hashes(scene) -> dict:
+    """Digest of ``per_light`` and ``transmittance`` of ``scene`` in each variant."""
+    return {key: _digest(array) for key, array in buffers(scene).items()}
 
 
 def main() -> int:

@@ -102,7 +102,10 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   loop over all ``LANES`` lanes (a constant trip count), the spot map's coordinates and reads in one loop. None was
   faster; what binds the march is the float64 work per sample, which the float32 mode does not narrow (``exp`` and
   ``expm1`` in float64, the map coordinates and texels in float64, the same quotients and roots), and the gathers'
-  wait on the memory (about a tenth of the time on Zen 4).
+  wait on the memory (about a tenth of the time on Zen 4). Three of a sample's six divisions taken away by exact
+  algebra (BENCHMARKS.md "The march: fewer divisions per sample, measured, not adopted": the albedo ``σs/σt`` per
+  medium, ``1/d² = (1/d)²``, the phase function's and the fog leg's divisions as one) moved the last bits and
+  bought nothing on the device: the divider does not bind the march either.
 """
 
 from __future__ import annotations
