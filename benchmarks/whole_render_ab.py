@@ -57,6 +57,7 @@ if __name__ == "__main__":
 
 def main(out_dir: str, pairs: int, a: str, b: str, cache_root: str = "/tmp/wrab") -> None:
     out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
     trees = {"A": Path(a).resolve(), "B": Path(b).resolve()}
 
     def env(label: str) -> dict:
