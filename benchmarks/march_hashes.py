@@ -1,7 +1,8 @@
 """SHA-256 of the physical march's buffers, to show that a change of the march keeps the bits (BENCHMARKS.md, "The
 march: bands in place, whole tiles, gathered depth reads").
 
-Every bundled scene (16) and the bench scene (b) (four PCF-shadowed lights), at 48x27x16, each in the variants
+Every bundled scene (16), the bench scene (b) (four PCF-shadowed lights) as it is, without its height fog and in a
+bounded medium, and ``pillars`` in a bounded medium, at 48x27x16, each in the variants
 {pcf, hard maps} x {float64, float32} x {light leg on, off}: :func:`vlref.techniques.physical.march_buffers`'s
 ``per_light`` and ``transmittance``, one digest each.
 
@@ -22,6 +23,7 @@ from vlref.bench.config import bench_scene
 from vlref.render import prepare_frame
 from vlref.scene.bundled import bundled_scenes
 from vlref.scene.load import load_scene
+from vlref.scene.model import Bounds
 from vlref.scene.technique_params import resolved
 from vlref.techniques.physical import march_buffers
 
@@ -57,7 +59,15 @@ def hashes(scene) -> dict:
 
 
 def main() -> int:
-    scenes = {"bench_four": bench_scene(48, 27, 16, "four", 256)}
+    four = bench_scene(48, 27, 16, "four", 256)
+    scenes = {"bench_four": four,
+              # the light leg's branches for a homogeneous medium and a bounded one (with and without height fog)
+              "bench_four_homogeneous": four.replace(medium=dataclasses.replace(four.medium, height_fog=None)),
+              "bench_four_bounded": four.replace(medium=dataclasses.replace(
+                  four.medium, bounds=Bounds(min=(-6.0, -1.0, -4.0), max=(6.0, 5.0, 6.0))))}
+    pillars = load_scene("pillars", SIZE)
+    scenes["pillars_bounded"] = pillars.replace(medium=dataclasses.replace(
+        pillars.medium, bounds=Bounds(min=(-3.0, -1.0, -3.0), max=(3.0, 4.0, 3.0))))
     scenes.update({name: load_scene(name, SIZE) for name in sorted(bundled_scenes())})
     result = {name: hashes(scene) for name, scene in scenes.items()}
     if len(sys.argv) < 2:

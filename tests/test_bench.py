@@ -2,6 +2,7 @@
 the NumPy baseline equal to the march kernel, and the primitive BVH equal to a linear scan; `run_bench` of some
 sections, the timer's repeats. No timing asserts."""
 
+import dataclasses
 import json
 import math
 import multiprocessing
@@ -14,10 +15,14 @@ import pytest
 from vlref.bench import QUICK, SECTIONS, run_bench
 from vlref.bench.ceiling import bench_ceiling
 from vlref.bench.config import median_time
+from vlref.bench.march import march_samples
 from vlref.cli import main
 from vlref.errors import InputError
 from vlref.geometry import build_geometry, closest_hit, shadow_transmittance
+from vlref.render import prepare_frame
+from vlref.scene.load import load_scene
 from vlref.scene.model import Box, Cylinder, Light, Material, Plane, Scene, Sphere
+from vlref.techniques import resolved
 
 POSITIVE_SUFFIXES = ("seconds", "_s", "per_s", "per_s_per_thread", "bytes", "samples", "texels", "speedup")
 
@@ -165,3 +170,17 @@ def test_primitive_bvh_equals_linear_scan(seed):
             assert closest_hit(geo, *o, *d, 0.0, math.inf, opaque_only) == \
                 closest_hit(linear, *o, *d, 0.0, math.inf, opaque_only)
         assert shadow_transmittance(geo, *o, *d, 1.0) == shadow_transmittance(linear, *o, *d, 1.0)
+
+
+def test_march_samples_count_the_steps_the_march_takes():
+    """A scene that leaves ``render.steps`` unset is marched with its technique's default: the samples count those
+    steps, pairs x steps, as with the same count set explicitly and half of twice as many."""
+    scene = load_scene("pillars", ("render.width=32", "render.height=18"))
+    assert scene.render.steps is None
+    steps = resolved(scene, "steps")
+    samples = march_samples(scene, prepare_frame(scene))
+    set_steps = scene.replace(render=dataclasses.replace(scene.render, steps=steps))
+    doubled = scene.replace(render=dataclasses.replace(scene.render, steps=2 * steps))
+    assert samples > 0 and samples % steps == 0
+    assert samples == march_samples(set_steps, prepare_frame(set_steps))
+    assert 2 * samples == march_samples(doubled, prepare_frame(doubled))

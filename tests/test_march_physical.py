@@ -108,6 +108,22 @@ def test_directional_light_leg_in_a_bounded_medium():
     assert off[0, 0, 0, 0] == pytest.approx(want / math.exp(-0.2 * 1.5), rel=1e-9)
 
 
+@pytest.mark.parametrize("kind, position, sigma_t", [("point", (0.0, 1.0, 5.0), 0.2), ("point", (0.6, -0.8, 2.0), 0.05),
+                                                     ("spot", (0.0, 3.0, 5.0), 0.3)])
+def test_the_light_leg_of_a_homogeneous_medium_is_exp_of_sigma_t_times_the_distance(kind, position, sigma_t):
+    """A homogeneous unbounded medium (no fog, no noise): one step, its sample at t = 5 on the view axis, x = (0, 0, 5);
+    the light leg multiplies the sample's in-scattering by T_l = exp(-σt |x - p|) and nothing else."""
+    light = Light(type=kind, position=position, direction=(0.0, -1.0, 0.0), spot_angle=120.0, intensity=3.0,
+                  range=1e3)
+    medium = Medium(scattering=sigma_t / 2, absorption=sigma_t / 2, anisotropy=0.3)
+    cam = CameraSettings(position=(0.0, 0.0, 0.0), look_at=(0.0, 0.0, 1.0), fov=1e-3)
+    on, off = (_run(_scene([light], medium=medium, cam=cam, w=1, h=1, max_distance=10.0, extinction=e), 1, 0.5)[0]
+               for e in (True, False))
+    dist = math.dist((0.0, 0.0, 5.0), position)
+    assert off[0, 0, 0, 0] > 0
+    assert on[0, 0, 0, 0] / off[0, 0, 0, 0] == pytest.approx(math.exp(-sigma_t * dist), rel=1e-12)
+
+
 def hg_np(c, g):
     return (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * np.asarray(c)) ** 1.5)
 

@@ -43,12 +43,13 @@ def _active(lights, origin, dirs, t_end, out):
 
 
 def march_samples(scene: Scene, frame) -> int:
-    """Samples the physical march of ``frame`` takes: active (pixel, light) pairs times ``render.steps``."""
+    """Samples the physical march of ``frame`` takes: active (pixel, light) pairs times its steps (``render.steps``, or
+    the technique's default where the scene leaves it unset)."""
     dirs = frame.camera.ray_directions()
     t_end = np.minimum(frame.gbuffer.distance, scene.render.max_distance)
     count = np.empty(t_end.shape, dtype=np.int64)
     _active(frame.lights.astype(np.float64), np.asarray(frame.camera.position, float), dirs, t_end, count)
-    return int(count.sum()) * int(scene.render.steps)
+    return int(count.sum()) * int(resolved(scene, "steps"))
 
 
 def _time_march(scene: Scene, repeats: int) -> dict:

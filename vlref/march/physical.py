@@ -379,8 +379,10 @@ def _light_stage(s, n, lights, k):
 @njit(cache=True, fastmath=False, error_model="numpy")
 def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
     """The light leg ``T_l``, Beer–Lambert from the sample to the light (module docstring): 1 unless the leg
-    ``attenuates`` (:func:`~vlref.medium.light_leg_attenuates`), else the height fog's closed form or
-    :func:`~vlref.medium.optical_depth`."""
+    ``attenuates`` (:func:`~vlref.medium.light_leg_attenuates`), else the height fog's closed form, a noiseless
+    medium's closed form (:func:`~vlref.medium.smooth_optical_depth`, what :func:`~vlref.medium.optical_depth`
+    returns there, in a loop without the noise's sub-steps: BENCHMARKS.md "The march's stages on the device, priced
+    by taking them away"), or :func:`~vlref.medium.optical_depth`."""
     prefer_wide_vectors()
     mp, lattice = medium.params, medium.noise
     zero, one = zero_one(s)
@@ -396,6 +398,14 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
             dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
             top = rho if ea >= el else fog_l
             set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el)))))
+    elif mp[M_FOG] == zero and not noise and not bounded:  # a homogeneous medium: τ = σt · dist
+        for m in range(n):
+            set_lane(s, R_T_LIGHT, m, exp(-(st0 * lane(s, R_DIST, m))))
+    elif not noise:  # optical_depth without its noise loop: the same closed form, and the lane loop vectorises
+        for m in range(n):
+            x, y, z = lane3(s, R_POS, m)
+            lx, ly, lz = lane3(s, R_TO_LIGHT, m)
+            set_lane(s, R_T_LIGHT, m, exp(-smooth_optical_depth(mp, x, y, z, lx, ly, lz, zero, lane(s, R_DIST, m))))
     else:
         for m in range(n):
             x, y, z = lane3(s, R_POS, m)
