@@ -57,6 +57,8 @@ def test_every_section_with_finite_positive_figures(report):
     for name in ("one_spot", "four_lights"):  # float32 marches the same (pixel, light) pairs
         assert report["march"][name + "_float32"]["precision"] == "float32"
         assert report["march"][name + "_float32"]["samples"] == report["march"][name]["samples"]
+    # (a) without its height fog: the same segments, so the same samples
+    assert report["march"]["one_spot_no_fog"]["samples"] == report["march"]["one_spot"]["samples"]
     assert "1" in report["scaling"]["threads"]
     assert isinstance(report["machine"]["llvm_cpu"], str) and report["machine"]["llvm_cpu"]
     ceiling = report["scaling"]["machine_ceiling"]

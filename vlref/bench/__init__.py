@@ -11,7 +11,9 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
                   (b) ``four_lights`` -- two spot lights, a point light and a directional light, each with
                   PCF shadows. **Samples** are (pixel, light) pairs whose ray segment inside the light's
                   volume is not empty, times the step count: the work the kernel does. Both again with
-                  ``render.precision = "float32"`` (``one_spot_float32``, ``four_lights_float32``).
+                  ``render.precision = "float32"`` (``one_spot_float32``, ``four_lights_float32``), and (a)
+                  without its height fog (``one_spot_no_fog``, float64): the homogeneous medium of most
+                  bundled scenes, whose light leg takes another branch of the kernel.
 ``baseline``      the same computation as (a) in vectorised NumPy (:mod:`vlref.bench.baseline`), its
                   samples/s, its largest relative difference to the kernel, and the kernel/NumPy ratios;
                   and :func:`plain_march` (one ``exp``, one ``pow``, one hard shadow lookup per sample, on

@@ -65,13 +65,17 @@ def _time_march(scene: Scene, repeats: int) -> dict:
 
 def bench_march(cfg: BenchConfig) -> dict:
     """Scenes (a) ``one_spot`` and (b) ``four_lights`` in float64, then both in float32 (``render.precision``;
-    keys ``one_spot_float32``, ``four_lights_float32``)."""
+    keys ``one_spot_float32``, ``four_lights_float32``), then (a) in float64 without its height fog
+    (``one_spot_no_fog``: a homogeneous medium, as in most bundled scenes)."""
     out = {}
     for precision, suffix in (("float64", ""), ("float32", "_float32")):
         for name, lights in (("one_spot", "one"), ("four_lights", "four")):
             scene = bench_scene(cfg.width, cfg.height, cfg.steps, lights, cfg.shadow_resolution)
             scene = dataclasses.replace(scene, render=dataclasses.replace(scene.render, precision=precision))
             out[name + suffix] = {"precision": precision, **_time_march(scene, cfg.repeats)}
+    scene = bench_scene(cfg.width, cfg.height, cfg.steps, "one", cfg.shadow_resolution)
+    scene = scene.replace(medium=dataclasses.replace(scene.medium, height_fog=None))
+    out["one_spot_no_fog"] = {"precision": "float64", **_time_march(scene, cfg.repeats)}
     return out
 
 
