@@ -31,7 +31,7 @@ as the irradiance arriving at the sample (an infinite homogeneous medium would o
 completely); bound the medium with ``medium.bounds`` to attenuate sunlight on its way in. With noise the
 leg uses ``leg_steps`` midpoint sub-steps. In a noiseless height fog without bounds, the leg of a
 point/spot light is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor reused
-for the larger end.
+for the larger end; in a homogeneous medium without bounds, ``τ = σt`` times the distance to the light.
 
 The stages of one step, each a function below, in the order they run (:func:`_march_packet`):
 
@@ -398,7 +398,7 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
             dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
             top = rho if ea >= el else fog_l
             set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el)))))
-    elif mp[M_FOG] == zero and not noise and not bounded:  # a homogeneous medium: τ = σt · dist
+    elif mp[M_FOG] == zero and not noise and not bounded:  # homogeneous, unbounded: τ = σt · dist, as optical_depth
         for m in range(n):
             set_lane(s, R_T_LIGHT, m, exp(-(st0 * lane(s, R_DIST, m))))
     elif not noise:  # optical_depth without its noise loop: the same closed form, and the lane loop vectorises
