@@ -4,8 +4,8 @@ device, priced by taking them away").
 
 Each switch turns a stage of :mod:`vlref.march.physical` into its cheap branch of the same compiled kernel (no light
 with shadows: ``_shadow_stage`` sets ``V = 1``; ``light_extinction = false``: ``_leg_stage`` sets ``T_l = 1``; no height
-fog: ``_medium_stage`` takes the constant density and ``_leg_stage`` the sub-step loop's closed form of a homogeneous
-medium), so a variant's time less the full scene's is what that stage costs, to within what the compiled loops share.
+fog: ``_medium_stage`` takes the constant density and ``_leg_stage`` the homogeneous medium's ``exp(-σt · dist)``),
+so a variant's time less the full scene's is what that stage costs, to within what the compiled loops share.
 The samples (pixel, light) x steps are the same in every variant: no switch moves a segment.
 
     PYTHONPATH=$PWD NUMBA_CACHE_DIR=/tmp/nc python3 benchmarks/march_stages.py stages [one|four] [ROUNDS] [REPEATS]
