@@ -1,14 +1,17 @@
 """The medium: density factors, noise, bounds, optical depth (closed forms vs quadrature)."""
 
 import math
+from decimal import Decimal, localcontext
 from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from scipy.integrate import quad
 
-from vlref.medium import (M_ST, density, load_noise_volume, noise_lattice, noise_value, optical_depth,
-                          pack_medium)
+from vlref.medium import (FOG_SERIES_BELOW, M_ST, density, fog_mean_factor, load_noise_volume, noise_lattice,
+                          noise_value, optical_depth, pack_medium)
 from vlref.scene.model import Bounds, HeightFog, Light, Medium, Noise, RenderSettings, Scene
 
 NOISE_FILE = Path("/work/shared/data/volumetriclights/NoiseVolume.bytes")
@@ -30,6 +33,61 @@ def test_height_fog_optical_depth_closed_form(d):
     o = (0.2, 1.0, -1.0)
     got = optical_depth(m.params, m.noise, *o, *d, 0.5, 9.0, 1)
     assert got == pytest.approx(_tau_quad(m, o, d, 0.5, 9.0), rel=1e-10)
+
+
+def _exact_fog_mean(ea, eb) -> Decimal:
+    """The mean of e^e over a segment where e runs linearly from ea to eb (floats), in 50 digits."""
+    with localcontext() as ctx:
+        ctx.prec = 50
+        a, b = Decimal(float(ea)), Decimal(float(eb))
+        return a.exp() if a == b else (max(a, b).exp() - min(a, b).exp()) / abs(a - b)
+
+
+@pytest.mark.parametrize("dtype, bound", [(np.float64, 4e-15), (np.float32, 1e-6)])
+def test_fog_mean_factor_against_the_exact_mean(dtype, bound):
+    """The series below the cut and the difference above it, each to a few ulp of the exact mean, for factors
+    that are the correctly rounded e^{e_a}, e^{e_b} (δ from 1e-12 to 60, both sides of the cut)."""
+    rng = np.random.default_rng(5)
+    gaps = np.concatenate([np.geomspace(1e-12, 60.0, 600), rng.uniform(0.0, 2.0, 600), [FOG_SERIES_BELOW[0],
+                           FOG_SERIES_BELOW[1]]])
+    worst = 0.0
+    for gap, ea in zip(gaps, rng.uniform(-30.0, 30.0, gaps.size)):
+        ea = dtype(ea)
+        eb = dtype(ea + dtype(gap))
+        for a, b in ((ea, eb), (eb, ea)):
+            got = fog_mean_factor(dtype(math.exp(a)), dtype(math.exp(b)), abs(a - b))
+            assert dtype(got) == got  # computed in the factors' precision
+            exact = _exact_fog_mean(a, b)
+            worst = max(worst, float(abs(Decimal(float(got)) - exact) / exact))
+    assert worst <= bound
+
+
+@pytest.mark.parametrize("dtype", [np.float64, np.float32])
+def test_fog_mean_factor_is_continuous_at_its_cut(dtype):
+    """Just below and just above δ_c (series, then difference) the means agree to the difference's rounding."""
+    cut = FOG_SERIES_BELOW[0] if dtype == np.float64 else FOG_SERIES_BELOW[1]
+    tol = 1e-15 if dtype == np.float64 else 1e-6
+    for ea in (-3.0, 0.0, 2.5):
+        below, above = np.nextafter(dtype(cut), dtype(0)), dtype(cut)
+        means = [fog_mean_factor(dtype(math.exp(ea)), dtype(math.exp(ea - float(gap))), gap) for gap in (below, above)]
+        assert means[0] == pytest.approx(means[1], rel=tol)
+
+
+def test_fog_mean_factor_below_the_cut_does_not_cancel():
+    """A factor off by a relative ε (the march's running product) moves the mean by about ε, not ε/δ: below the
+    cut the mean is the top factor times the series, so the bottom factor's error does not enter at all."""
+    top, gap = math.exp(1.0), 1e-9
+    exact = fog_mean_factor(top, math.exp(1.0 - gap), gap)
+    for eps in (1e-14, -1e-14):
+        assert fog_mean_factor(top, math.exp(1.0 - gap) * (1.0 + eps), gap) == exact
+        assert fog_mean_factor(top * (1.0 + eps), math.exp(1.0 - gap), gap) == pytest.approx(exact, rel=2e-14)
+
+
+@given(st.floats(-60.0, 60.0), st.floats(-60.0, 60.0))
+def test_fog_mean_factor_lies_between_the_end_factors(ea, eb):
+    fa, fb = math.exp(ea), math.exp(eb)
+    mean = fog_mean_factor(fa, fb, abs(ea - eb))
+    assert min(fa, fb) * (1 - 1e-15) <= mean <= max(fa, fb) * (1 + 1e-15)
 
 
 def test_height_fog_along_a_level_ray_is_homogeneous_at_that_height():

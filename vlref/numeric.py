@@ -76,16 +76,17 @@ def _zero_one_impl(like):
 
 
 def is_float64(like):
-    """Whether the array ``like`` holds float64 values. Inside njit code a constant of the compile (each precision
-    compiles its own), so a kernel can take a float64-only shortcut with no run-time branch."""
+    """Whether the array or float ``like`` holds float64 values. Inside njit code a constant of the compile (each
+    precision compiles its own), so a kernel can take a float64-only shortcut with no run-time branch."""
     return np.asarray(like).dtype == np.float64
 
 
 @overload(is_float64)
 def _is_float64_impl(like):
-    if not isinstance(like, types.Array) or not isinstance(like.dtype, types.Float):
+    dtype = like.dtype if isinstance(like, types.Array) else like
+    if not isinstance(dtype, types.Float):
         return None
-    if like.dtype == types.float64:
+    if dtype == types.float64:
         return lambda like: True
     return lambda like: False
 

@@ -30,8 +30,10 @@ medium box. **An unbounded medium gives a directional light ``T_l = 1``**: its i
 as the irradiance arriving at the sample (an infinite homogeneous medium would otherwise extinguish it
 completely); bound the medium with ``medium.bounds`` to attenuate sunlight on its way in. With noise the
 leg uses ``leg_steps`` midpoint sub-steps. In a noiseless height fog without bounds, the leg of a
-point/spot light is :func:`vlref.medium.optical_depth`'s closed form with the sample's fog factor reused
-for the larger end; in a homogeneous medium without bounds, ``τ = σt`` times the distance to the light.
+point/spot light is :func:`vlref.medium.optical_depth`'s closed form, ``σt`` times the distance times the fog
+factor's mean along the leg (:func:`vlref.medium.fog_mean_factor`) of the sample's factor and the light's: the
+difference of the two factors over the gap of their exponents, no ``exp`` of its own; in a homogeneous medium
+without bounds, ``τ = σt`` times the distance to the light.
 
 The stages of one step, each a function below, in the order they run (:func:`_march_packet`):
 
@@ -93,7 +95,10 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   ``e^{e_0} q^i`` (one multiply per step, rows ``R_FOG``/``R_FOG_STEP``) unless a sample reaches
   ``FOG_MAX_EXPONENT``. ``e^{-σt Δ}`` is ``1 + expm1(-σt Δ)`` from the ``expm1`` the step integral needs.
   These change results by rounding only (≤ 1e-14 relative in float64 and ≤ 3e-6 in float32 against the
-  per-step ``exp`` form).
+  per-step ``exp`` form). The light leg takes the sample's factor from the running product too: the fog factor's
+  mean along the leg is the difference of the sample's and the light's factors over the gap of their exponents
+  (:func:`vlref.medium.fog_mean_factor`, a series below its cut), where the closed form's ``(1 - e^{-δ})/δ``
+  took an ``expm1`` per sample (BENCHMARKS.md "The fog leg without its expm1").
 * Compilation: counts and flags are passed as ``np.int64`` / plain ``bool`` values, never literals (a
   ``Literal[int](0)`` or ``Literal[bool](True)`` argument compiles a function a second time); ``geo`` None
   compiles the march without the ray tracer (:func:`march_physical`).
@@ -125,7 +130,7 @@ from ..lights.shadow_lookup import (apply_strength, cascade_map_coords, cube_map
 from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC, S_CASCADES, S_MODE, S_OFFSET, S_RES,
                                   S_STRENGTH)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
-                      M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_depth_ratio,
+                      M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_mean_factor,
                       fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
                       step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
@@ -396,8 +401,7 @@ def _leg_stage(s, n, medium, kind, light_y, attenuates, leg_steps):
         fog_l = exp(el)
         for m in range(n):
             dist, ea, rho = lane(s, R_DIST, m), lane(s, R_FOG_EXP, m), lane(s, R_RHO, m)
-            top = rho if ea >= el else fog_l
-            set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * top * fog_depth_ratio(abs(ea - el)))))
+            set_lane(s, R_T_LIGHT, m, exp(-(st0 * dist * fog_mean_factor(rho, fog_l, abs(ea - el)))))
     elif mp[M_FOG] == zero and not noise and not bounded:  # homogeneous, unbounded: τ = σt · dist, as optical_depth
         for m in range(n):
             set_lane(s, R_T_LIGHT, m, exp(-(st0 * lane(s, R_DIST, m))))
