@@ -68,6 +68,9 @@ def test_every_section_with_finite_positive_figures(report):
     assert report["memory"]["subprocess_maxrss_bytes"] > report["memory"]["tracemalloc_peak_bytes"] > 0
     whole = report["whole_render"]
     assert whole["seconds"] > whole["split"]["write"] > 0 and whole["split"]["volumetrics"] > 0
+    # the split's parts are disjoint spans of the process's life: each positive, together within its wall time
+    assert {"interpreter_start", "import", "exit"} <= set(whole["split"]) and min(whole["split"].values()) > 0
+    assert sum(whole["split"].values()) <= whole["seconds"] + 1e-3
     assert len(report["targets"]) == 13 and all(isinstance(t["met"], bool) for t in report["targets"])
 
 

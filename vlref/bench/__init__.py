@@ -34,6 +34,10 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
 ``first_render``  a fresh interpreter that imports vlref, renders (a) at 320x180 and writes its outputs as
                   ``vlref render`` does (cold kernels compiled ahead in second processes), with a fresh
                   (``cold``) and then a filled (``warm``) ``NUMBA_CACHE_DIR``: process wall time, its split.
+``whole_render``  the ``vlref render`` of (b) at the full size in a fresh interpreter with this process's (warm)
+                  cache, as the command renders and writes it: process wall time (median of ``repeats``) and its
+                  split (:func:`~vlref.bench.renders.bench_whole_render`): the interpreter's start, vlref's
+                  import, each render stage, the writing, the exit.
 ``memory``        peak memory of a frame of (b) at the memory size (steps do not change allocations):
                   ``tracemalloc`` peak of the NumPy allocations in this process, and the peak resident
                   set of a subprocess that renders the same frame (``VmHWM``; ``ru_maxrss`` where there
