@@ -2,8 +2,8 @@
 unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
 works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
 initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
-``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, and without colorama; other processes as
-always. Each case runs in a fresh interpreter (the
+``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, and without colorama or Cython; other
+processes as always. Each case runs in a fresh interpreter (the
 initialisation happens once a process)."""
 
 import json
@@ -225,6 +225,36 @@ def test_the_render_program_imports_numba_without_colorama(tmp_path):
 
     assert state("render") == {"colorama imported": False, "numba highlights": False, "colorama works": True}
     assert state("scenes") == {"colorama imported": True, "numba highlights": True, "colorama works": True}
+
+
+WITH_CYTHON_INSTALLED = r"""
+import json, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import scipy._lib._testutils as testutils  # imported by SciPy's import, which Numba's import makes
+state = {"cython imported": "cython" in sys.modules, "scipy's test helper sees it": testutils.cython is not None}
+import cython  # a complete import afterwards
+state["cython works"] = cython.compiled is False
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_numba_without_cython(tmp_path):
+    site = tmp_path / "site"  # a stand-in for Cython, installed for these processes: the names SciPy's import reads
+    (site / "Cython" / "Compiler").mkdir(parents=True)
+    (site / "Cython" / "__init__.py").write_text("")
+    (site / "Cython" / "Compiler" / "__init__.py").write_text("")
+    (site / "Cython" / "Compiler" / "Version.py").write_text("version = '3.1.0'\n")
+    (site / "cython.py").write_text("compiled = False\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")])))
+
+    def state(command):
+        proc = subprocess.run([sys.executable, "-c", WITH_CYTHON_INSTALLED, command], capture_output=True, text=True,
+                              check=True, env=env)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+
+    assert state("render") == {"cython imported": False, "scipy's test helper sees it": False, "cython works": True}
+    assert state("scenes") == {"cython imported": True, "scipy's test helper sees it": True, "cython works": True}
 
 
 AHEAD_PROCESS = r"""

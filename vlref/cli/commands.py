@@ -87,8 +87,9 @@ NUMBA_CONFIG_FILE = ".numba_config.yaml"
 
 
 def _numba_alone() -> contextlib.ExitStack:
-    """A block in which Numba, where it is still to be imported, is imported without three optional packages it imports
-    only for work the process does not do (:func:`vlref.processes.not_importable`; each is a complete import later):
+    """A block in which Numba, where it is still to be imported, is imported without four optional packages that its
+    import brings in only for work the process does not do (:func:`vlref.processes.not_importable`; each is a complete
+    import later):
 
     * PyYAML, where the current folder holds no :data:`NUMBA_CONFIG_FILE`: Numba's configuration imports it only to
       read that file (and warns when the file exists without PyYAML); without the file its settings are the same
@@ -100,13 +101,18 @@ def _numba_alone() -> contextlib.ExitStack:
     * colorama, where it is not imported yet: Numba imports it (``numba.core.errors``) to highlight its error
       messages (ANSI bold even in its default ``no_color`` theme); without it they are plain text, as where colorama
       is not installed, and this process shows one only where a compile fails (0.007-0.010 s of the import on the
-      device, whose Python has colorama installed).
+      device, whose Python has colorama installed);
+    * Cython, where it is not imported yet: Numba's import imports SciPy (its version check), whose
+      ``scipy._lib._testutils`` imports Cython to check its version for SciPy's own test helper that builds Cython
+      extensions (``cython = None`` where it is missing: nothing else reads it); no Cython code is built here (0.022 s
+      of the import on the device, whose Python has Cython installed).
     """
     fresh = "numba" not in sys.modules
     block = contextlib.ExitStack()
     block.enter_context(not_importable("yaml", fresh and not os.path.isfile(NUMBA_CONFIG_FILE)))
     block.enter_context(not_importable("coverage", fresh))
     block.enter_context(not_importable("colorama", fresh))
+    block.enter_context(not_importable("cython", fresh and "scipy" not in sys.modules))
     return block
 
 
