@@ -51,8 +51,8 @@ from .numeric import cast, exp, is_float64
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
            "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
-           "fog_mean_factor", "FOG_SERIES_BELOW", "in_bounds", "box_contains", "step_source_weight", "light_leg_attenuates",
-           "FOG_MAX_EXPONENT"]
+           "fog_mean_factor", "FOG_SERIES_BELOW", "in_bounds", "box_contains", "step_source_weight",
+           "light_leg_attenuates", "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
