@@ -68,8 +68,12 @@ print(json.dumps({"have_blas": numba.np.arraymath._HAVE_BLAS, "scipy.linalg": "s
 """
 
 
-def _state(code: str) -> dict:
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+def _state(code: str, *args: str, site=None) -> dict:
+    """The JSON line ``code`` prints last in a fresh interpreter given ``args``; ``site``: a folder of stand-in
+    packages put first on its path."""
+    env = None if site is None else dict(
+        os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")])))
+    proc = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, check=True, env=env)
     return json.loads(proc.stdout.strip().splitlines()[-1])
 
 
@@ -181,13 +185,9 @@ def test_the_render_program_imports_numba_without_coverage_unless_a_measurement_
     (package / "__init__.py").write_text("from . import types\n\n\nclass Coverage:\n    @staticmethod\n"
                                          "    def current():\n        return None\n")
     (package / "types.py").write_text("class Tracer:\n    pass\n\n\ndef __getattr__(name):\n    return object\n")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path / "site"),
-                                                                    os.environ.get("PYTHONPATH")])))
 
     def state(command, measured):
-        proc = subprocess.run([sys.executable, "-c", WITH_COVERAGE_INSTALLED, command, measured], capture_output=True,
-                              text=True, check=True, env=env)
-        return json.loads(proc.stdout.strip().splitlines()[-1])
+        return _state(WITH_COVERAGE_INSTALLED, command, measured, site=tmp_path / "site")
 
     assert state("render", "not measured") == {"coverage imported": False, "numba reports to coverage": False,
                                                "coverage works": True}
@@ -215,13 +215,9 @@ def test_the_render_program_imports_numba_without_colorama(tmp_path):
                                          "reinit = deinit = init\n\n\nclass Names:\n"
                                          "    def __getattr__(self, name):\n        return name.lower()\n\n\n"
                                          "Fore = Style = Names()\n")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(tmp_path / "site"),
-                                                                    os.environ.get("PYTHONPATH")])))
 
     def state(command):
-        proc = subprocess.run([sys.executable, "-c", WITH_COLORAMA_INSTALLED, command], capture_output=True, text=True,
-                              check=True, env=env)
-        return json.loads(proc.stdout.strip().splitlines()[-1])
+        return _state(WITH_COLORAMA_INSTALLED, command, site=tmp_path / "site")
 
     assert state("render") == {"colorama imported": False, "numba highlights": False, "colorama works": True}
     assert state("scenes") == {"colorama imported": True, "numba highlights": True, "colorama works": True}
@@ -246,12 +242,9 @@ def test_the_render_program_imports_numba_without_cython(tmp_path):
     (site / "Cython" / "Compiler" / "__init__.py").write_text("")
     (site / "Cython" / "Compiler" / "Version.py").write_text("version = '3.1.0'\n")
     (site / "cython.py").write_text("compiled = False\n")
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(site), os.environ.get("PYTHONPATH")])))
 
     def state(command):
-        proc = subprocess.run([sys.executable, "-c", WITH_CYTHON_INSTALLED, command], capture_output=True, text=True,
-                              check=True, env=env)
-        return json.loads(proc.stdout.strip().splitlines()[-1])
+        return _state(WITH_CYTHON_INSTALLED, command, site=site)
 
     assert state("render") == {"cython imported": False, "scipy's test helper sees it": False, "cython works": True}
     assert state("scenes") == {"cython imported": True, "scipy's test helper sees it": True, "cython works": True}
