@@ -328,3 +328,91 @@ def test_the_render_programs_process_loads_cached_kernels_without_the_registrati
         assert state["user code"] == [14.0, 3]  # 0 + 1 + 4 + 9; len("ABC")
         assert state["deferred after"] is False and state["registries installed after"] > 10
         assert state["cffi imported"] is False
+
+
+LINKED_ON_DEMAND = r"""
+import hashlib, json, tempfile
+import numpy as np
+from vlref.cli.commands import program_command
+render_to_folder = program_command("render").render_to_folder
+from vlref import jit_init
+from vlref.post.composite import _sum_composite
+from vlref.scene import load_scene
+
+loaded = []  # (library, the names its object file defines, its bitcode still unparsed)
+load = jit_init._LinkedOnDemand._unserialize.__func__
+
+
+def recorded(cls, codegen, state):
+    library = load(cls, codegen, state)
+    loaded.append((library, jit_init.object_symbols(state[2][0]), library._linking_bitcode is not None))
+    return library
+
+
+jit_init._LinkedOnDemand._unserialize = classmethod(recorded)
+with tempfile.TemporaryDirectory() as folder:
+    result, *_ = render_to_folder(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]),
+                                  folder + "/out")
+state = {"final": hashlib.sha256(np.ascontiguousarray(result.buffers["final"]).tobytes()).hexdigest(),
+         "loads": len(loaded), "unparsed at load": all(unparsed for _, _, unparsed in loaded),
+         "still unparsed": sum(library._linking_bitcode is not None for library, _, _ in loaded)}
+from numba import njit
+
+
+@njit(cache=False)
+def user_code(per_light, scene, trans):  # a compile that links a loaded library: its bitcode parsed then
+    inscatter, final = np.empty(scene.shape), np.empty(scene.shape)
+    _sum_composite(per_light, scene, trans, inscatter, final)
+    return inscatter, final
+
+
+composite = [library for library, _, _ in loaded if library in [c.library for c in _sum_composite.overloads.values()]]
+before = [library._linking_bitcode is not None for library in composite]
+rng = np.random.default_rng(1)
+per_light, scene, trans = rng.random((2, 4, 5, 3)), rng.random((4, 5, 3)), rng.random((4, 5))
+inscatter, final = user_code(per_light, scene, trans)
+state["user code"] = bool(np.array_equal(inscatter, per_light[0] + per_light[1])
+                          and np.array_equal(final, scene * trans[..., None] + inscatter))
+state["composite unparsed before, after"] = [before, [library._linking_bitcode is not None for library in composite]]
+same = []  # each library's names from its object file against Numba's own scan of its bitcode
+for library, names, _ in loaded:
+    module = library._shared_module
+    scanned = {f.name for f in module.functions if not f.is_declaration}
+    scanned |= {g.name for g in module.global_variables if not g.is_declaration}
+    same.append(names == scanned)
+state["names as Numba's scan"] = same
+print(json.dumps(state))
+"""
+
+
+def test_the_render_programs_process_loads_libraries_without_parsing_their_linking_bitcode():
+    """The program's own process defines a loaded library's names from its object file, the same names as Numba's
+    scan of the library's bitcode, and parses that bitcode only when a compile links the library: the render the
+    same bits as an ordinary process's, a compile afterwards that calls a loaded kernel works."""
+    from vlref.render import render
+    from vlref.scene import load_scene
+    import hashlib
+    import numpy as np
+
+    _state(LINKED_ON_DEMAND)  # fills the cache where it is cold (then nothing was loaded)
+    state = _state(LINKED_ON_DEMAND)
+    ordinary = render(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
+    assert state["final"] == hashlib.sha256(np.ascontiguousarray(ordinary.buffers["final"]).tobytes()).hexdigest()
+    assert state["loads"] >= 10 and state["unparsed at load"] is True  # the stages' kernels and their work
+    assert state["still unparsed"] == state["loads"]  # the render linked none of them
+    assert state["user code"] is True
+    assert state["composite unparsed before, after"] == [[True], [False]]
+    assert state["names as Numba's scan"] == [True] * state["loads"]
+
+
+def test_object_symbols_reads_only_elf64_little_endian_object_files():
+    from vlref.jit_init import object_symbols
+
+    header = bytearray(64)
+    header[:6] = b"\x7fELF\x02\x01"  # a 64-bit little-endian header
+    header[0x3A:0x3C] = (64).to_bytes(2, "little")  # section headers of 64 bytes
+    assert object_symbols(bytes(header)) is None  # no sections, so no symbol table
+    header[0x28:0x30], header[0x3C:0x3E] = (64).to_bytes(8, "little"), (3).to_bytes(2, "little")
+    assert object_symbols(bytes(header)) is None  # three sections past the file's end
+    for other in (b"", b"\xcf\xfa\xed\xfe" + bytes(60), b"\x7fELF\x01\x01" + bytes(58), b"\x7fELF\x02\x02" + bytes(58)):
+        assert object_symbols(other) is None  # empty, Mach-O, 32-bit ELF, big-endian ELF

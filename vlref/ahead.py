@@ -16,8 +16,9 @@ the march without the ray tracer about 27 s; BENCHMARKS.md "Cold start", "Schedu
 leaner compile", "Tiles, Estrin's `exp`, a tighter PCF loop" and "The frame around the kernels").
 
 A warm render's later stages are **loaded ahead on a thread** instead: Numba's load of a cached kernel is part
-Python (the index, unpickling, under the GIL) and part LLVM (parsing the library's bitcode, adding its object code,
-scanning its symbols: llvmlite's calls release the GIL; ~70 % of the 10 loads of a 1080p render on the dev box), so
+Python (the index, unpickling, under the GIL) and part LLVM (adding its object code; in other processes than the
+render program's also parsing the library's bitcode and scanning its symbols, :mod:`vlref.jit_init` "Loaded libraries
+linked on demand": llvmlite's calls release the GIL), so
 a thread that loads the BVH build, the ray cast's, the shading's, the shadow maps' and the march's functions in the
 order the render calls them (:data:`LOADED_AHEAD`) overlaps the LLVM parts with the main thread's own work (the
 camera's rays on threads, the NumPy set-up of each stage); the main thread's call of a function being loaded waits

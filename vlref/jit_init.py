@@ -50,6 +50,20 @@ the first kernel that the process compiles: a cold cache compiles as it always d
 0.07 s, its ray cast 0.07 -> 0.12 s (explained since: SciPy's BLAS threads, below; BENCHMARKS.md "Numba's
 initialisation deferred to the first compile").
 
+**Loaded libraries linked on demand** (that process, from the same initialisation on): Numba's cache keeps a compiled
+function as its machine code (an object file) and the LLVM bitcode of its library, for linking into a later compile;
+a load parses that bitcode and scans it for the names the library defines (Numba's
+``CPUCodeLibrary._unserialize``), which tell Numba's JIT engine the symbols it may look up
+(``JitEngine.is_symbol_defined``: an entry point's address, a C wrapper's). A render compiles nothing that links a
+loaded library, and on the dev box the parse and the scan were 73 % of the 10 loads of a warm render of bench (b)
+(0.24 of 0.33 s). There a library loaded from the cache (:class:`_LinkedOnDemand`) takes the defined names from its
+object file's own symbol table (:func:`object_symbols`: for the libraries of a render the same names as the scan,
+tests/test_jit_init.py) and keeps the bitcode as bytes, parsed on the first compile that links the library; an object
+file that is not ELF (another platform) loads as Numba loads it. Device, one host, 20 fresh processes each
+alternated: the 10 loads 0.189 -> 0.076 s, the shadow-map stage (which the loads ran beside) 0.094 -> 0.036 s, the
+render from its start to its files in place 1.407 -> 1.283 s (medians; BENCHMARKS.md "The whole render part by part
+on one clock").
+
 **SciPy's BLAS on one thread** (in a process that runs vlref's kernels alone): loading
 ``scipy.linalg.cython_blas`` loads SciPy's OpenBLAS, which starts a thread per core beyond the first, and each new
 thread spins (``sched_yield``) for about 2^28 cycles (~0.1 s) before it sleeps. Right after the initialisation
@@ -67,15 +81,18 @@ import importlib
 import importlib.machinery
 import importlib.util
 import os
+import struct
 import sys
 from typing import Iterator
 
+import llvmlite.binding as llvm
 from numba.core import compiler_lock, entrypoints, event, registry
+from numba.core.codegen import JITCodeLibrary
 from numba.core.runtime import rtsys
 
 from .processes import not_importable, own_kernels_only
 
-__all__ = ["initialise_numba", "BLAS_MODULE"]
+__all__ = ["initialise_numba", "object_symbols", "BLAS_MODULE"]
 
 BLAS_MODULE = "scipy.linalg.cython_blas"
 """The module Numba's BLAS check imports (``numba.np.linalg.ensure_blas``)."""
@@ -168,6 +185,77 @@ class _RefreshAtFirstCompile(event.Listener):
         pass
 
 
+_SHT_SYMTAB, _SHN_UNDEF, _STT_SECTION, _STT_FILE = 2, 0, 3, 4
+"""ELF's section type of a symbol table, section index of an undefined symbol, symbol types of a section and a file."""
+
+
+def object_symbols(obj: bytes) -> set[str] | None:
+    """The names an ELF64 little-endian object file defines: the entries of its symbol table (``SHT_SYMTAB``) whose
+    section is not ``SHN_UNDEF``, less the section and file entries (ELF's ``Elf64_Shdr`` and ``Elf64_Sym`` layouts);
+    None for any other file (another format, no symbol table, a malformed one)."""
+    if len(obj) < 64 or obj[:4] != b"\x7fELF" or obj[4] != 2 or obj[5] != 1:  # ELFCLASS64, ELFDATA2LSB
+        return None
+    table_at, = struct.unpack_from("<Q", obj, 0x28)
+    entry_size, count = struct.unpack_from("<HH", obj, 0x3A)
+    if entry_size != 64 or table_at + 64 * count > len(obj):
+        return None
+    sections = [struct.unpack_from("<IIQQQQIIQQ", obj, table_at + 64 * i) for i in range(count)]
+    names, tables = set(), 0
+    for _, section_type, _, _, offset, size, link, _, _, symbol_size in sections:
+        if section_type != _SHT_SYMTAB:
+            continue
+        tables += 1
+        if symbol_size != 24 or size % 24 or link >= count or offset + size > len(obj):
+            return None
+        strings = sections[link][4]
+        for name, info, _, section, _, _ in struct.iter_unpack("<IBBHQQ", obj[offset:offset + size]):
+            if section != _SHN_UNDEF and name != 0 and info & 0xF not in (_STT_SECTION, _STT_FILE):
+                end = obj.find(b"\0", strings + name)
+                if end < 0:
+                    return None
+                try:
+                    names.add(obj[strings + name:end].decode())
+                except UnicodeDecodeError:  # llvmlite reads LLVM's names as UTF-8: not a name Numba made
+                    return None
+    return names if tables else None
+
+
+class _LinkedOnDemand(JITCodeLibrary):
+    """Numba's JIT code library, whose load from the cache defines its names from its object file and leaves its
+    linking bitcode unparsed until a compile links it (module docstring, "Loaded libraries linked on demand")."""
+
+    def __init__(self, codegen, name, **kwargs):
+        self._linking_bitcode = None
+        super().__init__(codegen, name, **kwargs)
+
+    @property
+    def _shared_module(self):
+        """The library's module for linking into another (Numba's attribute), parsed here on first use."""
+        if self._linking_bitcode is not None:
+            self._linking_module, self._linking_bitcode = llvm.parse_bitcode(self._linking_bitcode), None
+        return self._linking_module
+
+    @_shared_module.setter
+    def _shared_module(self, module) -> None:
+        self._linking_module, self._linking_bitcode = module, None
+
+    @classmethod
+    def _unserialize(cls, codegen, state):
+        """Numba's load of a cached library (``CPUCodeLibrary._unserialize``, its object-code branch) with the names
+        read from the object file instead of the parsed bitcode, which waits for :attr:`_shared_module`."""
+        name, kind, data = state
+        names = object_symbols(data[0]) if kind == "object" else None
+        if names is None:
+            return super()._unserialize(codegen, state)
+        self = codegen.create_library(name)
+        self.enable_object_caching()
+        self._set_compiled_object(data[0])
+        self._linking_bitcode = data[1]
+        self._finalize_final_module()
+        codegen._engine._defined_symbols |= names
+        return self
+
+
 def _initialise_for_loading(context) -> None:
     """What loading vlref's kernels from the cache needs of Numba's initialisation, the rest deferred to the
     process's first compile (module docstring)."""
@@ -175,6 +263,9 @@ def _initialise_for_loading(context) -> None:
         importlib.import_module("numba.np.arraymath")
     rtsys.initialize(context)
     importlib.import_module("numba.experimental.function_type")
+    codegen = context.codegen()
+    if codegen._library_class is JITCodeLibrary:
+        codegen._library_class = _LinkedOnDemand
     context.refresh = _no_registrations_to_install
     event.register("numba:compile", _RefreshAtFirstCompile(context))
 
