@@ -6,10 +6,17 @@ initialises Numba without cffi support and extension entry points, and imports i
 processes as always. Each case runs in a fresh interpreter (the
 initialisation happens once a process)."""
 
+import hashlib
 import json
 import os
 import subprocess
 import sys
+
+import numpy as np
+
+from vlref.jit_init import object_symbols
+from vlref.render import render
+from vlref.scene import load_scene
 
 AFTER_RENDER = r"""
 import json, sys
@@ -366,7 +373,7 @@ def user_code(per_light, scene, trans):  # a compile that links a loaded library
     return inscatter, final
 
 
-composite = [library for library, _, _ in loaded if library in [c.library for c in _sum_composite.overloads.values()]]
+composite = [c.library for c in _sum_composite.overloads.values()]  # loaded from the cache above
 before = [library._linking_bitcode is not None for library in composite]
 rng = np.random.default_rng(1)
 per_light, scene, trans = rng.random((2, 4, 5, 3)), rng.random((4, 5, 3)), rng.random((4, 5))
@@ -389,11 +396,6 @@ def test_the_render_programs_process_loads_libraries_without_parsing_their_linki
     """The program's own process defines a loaded library's names from its object file, the same names as Numba's
     scan of the library's bitcode, and parses that bitcode only when a compile links the library: the render the
     same bits as an ordinary process's, a compile afterwards that calls a loaded kernel works."""
-    from vlref.render import render
-    from vlref.scene import load_scene
-    import hashlib
-    import numpy as np
-
     _state(LINKED_ON_DEMAND)  # fills the cache where it is cold (then nothing was loaded)
     state = _state(LINKED_ON_DEMAND)
     ordinary = render(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
@@ -406,8 +408,6 @@ def test_the_render_programs_process_loads_libraries_without_parsing_their_linki
 
 
 def test_object_symbols_reads_only_elf64_little_endian_object_files():
-    from vlref.jit_init import object_symbols
-
     header = bytearray(64)
     header[:6] = b"\x7fELF\x02\x01"  # a 64-bit little-endian header
     header[0x3A:0x3C] = (64).to_bytes(2, "little")  # section headers of 64 bytes

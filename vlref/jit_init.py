@@ -224,9 +224,8 @@ class _LinkedOnDemand(JITCodeLibrary):
     """Numba's JIT code library, whose load from the cache defines its names from its object file and leaves its
     linking bitcode unparsed until a compile links it (module docstring, "Loaded libraries linked on demand")."""
 
-    def __init__(self, codegen, name, **kwargs):
-        self._linking_bitcode = None
-        super().__init__(codegen, name, **kwargs)
+    _linking_bitcode = None  # bytes while unparsed
+    _linking_module = None
 
     @property
     def _shared_module(self):
