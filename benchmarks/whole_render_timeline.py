@@ -2,7 +2,8 @@
 render part by part on one clock"): the imports (NumPy, Numba, vlref), each call of the render's steps on the main
 thread, each load of the thread of :mod:`vlref.ahead` (Numba's initialisation, then each kernel), the march on its
 launch thread, and the writing's parts on their threads (each buffer's float32 channels, each EXR file, the PNG
-preview), as (thread, part, start, end) in seconds from the process's first statement.
+preview with its luminance, percentile, tone map and encoding), as (thread, part, start, end) in seconds from the
+process's first statement.
 
     PYTHONPATH=TREE NUMBA_CACHE_DIR=... python3 benchmarks/whole_render_timeline.py SCENE.pickle LABEL OUT.jsonl
 
@@ -35,6 +36,8 @@ TIMED = {  # module -> the names it calls the render's steps by
     "vlref.techniques.physical": ("offsets", "pack_medium", "march_physical", "sum_and_composite"),
     "vlref.io.render_files": ("channel_dict", "write_exr"),
     "vlref.cli.render": ("_write_preview",),
+    "vlref.cli.options": ("luminance", "percentile_exposure"),
+    "vlref.io.png": ("srgb8", "png_bytes"),
 }
 
 

@@ -2,6 +2,7 @@
 
 import json
 import os
+import struct
 import types
 
 import imageio.v3 as iio
@@ -15,14 +16,14 @@ from hypothesis.extra import numpy as hnp
 from vlref import __version__
 from vlref.errors import InputError
 from vlref.io.exposure import percentile_exposure
-from vlref.io.exr import _openexr, read_exr, write_exr
+from vlref.io.exr import ZIP_LEVEL, _openexr, _set_default_zip_level, read_exr, write_exr
 from vlref.io.files import write_npy, write_npz, write_text
 from vlref.io.images import read_image
 from vlref.io.output_folders import output_dir
 from vlref.io import png as png_module
 from vlref.io.png import png_bytes, png_text, write_png
 from vlref.io.render_files import save_buffers, save_render
-from vlref.io.tonemap import _srgb8_values, _SRGB_BAND, srgb8
+from vlref.io.tonemap import _srgb8_values, _SRGB_BAND, _SRGB_CHUNK, srgb8
 
 
 def _awkward_float32(rng, shape):
@@ -442,6 +443,35 @@ def test_exr_writer_uses_a_thread_per_core():
     assert OpenEXR.global_thread_count() == cores
 
 
+def _first_chunk_zlib_level(path):
+    """The FLEVEL field (0 fastest .. 3 slowest, RFC 1950) of the zlib stream of a scanline EXR's first chunk: the
+    header's attributes skipped to the empty name that ends them, the offset table's first entry, the chunk's
+    (y, size) and its data."""
+    data, pos = path.read_bytes(), 8
+    while data[pos] != 0:
+        type_end = data.index(b"\0", data.index(b"\0", pos) + 1)
+        pos = type_end + 5 + struct.unpack_from("<i", data, type_end + 1)[0]
+    chunk = struct.unpack_from("<Q", data, pos + 1)[0]
+    cmf, flg = data[chunk + 8], data[chunk + 9]
+    assert cmf == 0x78 and (cmf * 256 + flg) % 31 == 0  # deflate with a 32 KiB window, a valid check
+    return flg >> 6
+
+
+def test_exr_files_are_deflated_at_the_fastest_level(tmp_path):
+    # a smooth image, which deflate shrinks (OpenEXR stores a chunk that it cannot shrink as it is)
+    img = np.add.outer(np.linspace(0, 1, 64), np.linspace(0, 2, 48)).astype(np.float32)
+    assert ZIP_LEVEL == 1
+    assert _first_chunk_zlib_level(write_exr(tmp_path / "vlref.exr", img)) == 0  # libdeflate: levels 0-1
+    OpenEXR_module = _openexr()
+    try:
+        assert _set_default_zip_level(OpenEXR_module, 4)  # OpenEXR's own default, where the level is read
+        assert _first_chunk_zlib_level(write_exr(tmp_path / "level4.exr", img)) == 1  # levels 2-5
+    finally:
+        _set_default_zip_level(OpenEXR_module, ZIP_LEVEL)
+    for name in ("vlref.exr", "level4.exr"):  # lossless either way
+        np.testing.assert_array_equal(read_image(tmp_path / name)[:, :, 0], img)
+
+
 def _srgb8_formula(v, exposure):
     """srgb8's formula written out, on the whole array at once."""
     x = np.clip(np.nan_to_num(v * exposure, nan=0.0, posinf=1e6, neginf=0.0), 0.0, 1e6)
@@ -460,9 +490,10 @@ def test_srgb8_in_bands_is_the_formula_on_the_whole_image():
     a, b = 2.51 - 2.43 * y, 0.03 - 0.59 * y  # ACES fit inverted: a x^2 + b x - 0.14 y = 0
     x = (-b + np.sqrt(b * b + 4.0 * a * 0.14 * y)) / (2.0 * a)
     special = [np.nan, np.inf, -np.inf, -1.0, 0.0, 1e7]
+    h, w = 1031, 701
     v = np.concatenate([np.tile(np.concatenate([x, np.nextafter(x, 0.0), np.nextafter(x, 9.0), special]), 40),
-                        rng.random(3 * 517 * 301 - 40 * (3 * 255 + 6)) * 8.0]).reshape(517, 301, 3)
-    assert v.size // _SRGB_BAND >= 2 and v.shape[0] > 2 * _SRGB_BAND // (3 * v.shape[1])  # bands, chunks
+                        rng.random(3 * h * w - 40 * (3 * 255 + 6)) * 8.0]).reshape(h, w, 3)
+    assert v.size // _SRGB_BAND >= 2 and v.shape[0] // (v.size // _SRGB_BAND) > _SRGB_CHUNK // (3 * w)  # bands, chunks
     for exposure in (1.0, 0.37):
         assert np.array_equal(srgb8(v, exposure), _srgb8_formula(v, exposure))
         assert np.array_equal(_srgb8_values(v, exposure), _srgb8_formula(v, exposure))

@@ -15,9 +15,15 @@ from ..processes import host_cores
 
 __all__ = ["srgb8"]
 
-_SRGB_BAND = 1 << 16
-"""Values per band at least (smaller images run in one band), and about the values a band evaluates at once (its
-rows in chunks: the chunk's three scratch arrays, 1.5 MB, are allocated again and again from the same pages)."""
+_SRGB_BAND = 1 << 20
+"""Values per band at least (smaller images run in one band): a 1080p preview in 5 bands, so at most 5 threads. Each
+of a chunk's ~20 ufunc calls releases the GIL and takes it back, and many threads making many short calls queue for
+it: on the 16-core device the preview's tone map took 75-78 ms in 16 bands of 2^16 values against 29 ms in 5 bands,
+and the render's writing (the EXR files beside the preview) 0.176-0.178 s against 0.140 s (BENCHMARKS.md "The
+writing: EXR files at deflate level 1")."""
+_SRGB_CHUNK = 1 << 18
+"""About the values a band evaluates at once (its rows in chunks: the chunk's three scratch arrays, 6 MB, are
+allocated again and again from the same pages); fewer ufunc calls than chunks of 2^16, in arrays that stay small."""
 
 
 def srgb8(image: np.ndarray, exposure: float = 1.0) -> np.ndarray:
@@ -26,9 +32,9 @@ def srgb8(image: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     ``x = exposure * value`` (NaN -> 0, negatives -> 0, values above 1e6 clipped first), then the ACES
     filmic fit ``x(2.51x+0.03)/(x(2.43x+0.59)+0.14)`` clamped to [0, 1] (Narkowicz 2015), then the sRGB
     OETF ``12.92 y`` for ``y <= 0.0031308`` else ``1.055 y^(1/2.4) - 0.055``, then ``round(255 s)``.
-    Returns ``(H, W, 3)`` uint8. Elementwise NumPy over bands of rows on a thread per core (NumPy's ufuncs
-    release the GIL), each band in chunks of rows: the same codes as the whole array at once, without a kernel
-    to compile.
+    Returns ``(H, W, 3)`` uint8. Elementwise NumPy over bands of rows on threads (NumPy's ufuncs release the GIL;
+    at most a thread per core, each band at least :data:`_SRGB_BAND` values), each band in chunks of rows
+    (:data:`_SRGB_CHUNK`): the same codes as the whole array at once, without a kernel to compile.
     """
     a = np.asarray(image, dtype=np.float64)
     if a.ndim == 3 and a.shape[2] == 1:
@@ -41,7 +47,7 @@ def srgb8(image: np.ndarray, exposure: float = 1.0) -> np.ndarray:
     bands = min(host_cores(), max(1, a.size // _SRGB_BAND))
     edges = np.linspace(0, a.shape[0], bands + 1).astype(int)
 
-    rows = max(1, _SRGB_BAND // (a.shape[1] * 3))
+    rows = max(1, _SRGB_CHUNK // (a.shape[1] * 3))
 
     def band(k: int) -> None:
         for r in range(edges[k], edges[k + 1], rows):
