@@ -2,8 +2,8 @@
 unimported, Numba's BLAS check answers as it would have, and linear algebra in a user's own compiled code still
 works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
 initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
-``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, and without colorama or Cython; other
-processes as always. Each case runs in a fresh interpreter (the
+``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, without colorama or Cython, and with
+``importlib.metadata`` imported lazily; other processes as always. Each case runs in a fresh interpreter (the
 initialisation happens once a process)."""
 
 import hashlib
@@ -255,6 +255,27 @@ def test_the_render_program_imports_numba_without_cython(tmp_path):
 
     assert state("render") == {"cython imported": False, "scipy's test helper sees it": False, "cython works": True}
     assert state("scenes") == {"cython imported": True, "scipy's test helper sees it": True, "cython works": True}
+
+
+LAZY_METADATA = r"""
+import json, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import numba.core.entrypoints as entrypoints  # Numba's import imported it, for the extension scan
+state = {"imported": "importlib.metadata" in sys.modules,
+         "executed": "importlib.metadata._meta" in sys.modules}  # a module its code imports
+import numpy
+state["works"] = entrypoints.importlib_metadata.version("numpy") == numpy.__version__  # its first use runs it
+state["numba's and the import's"] = entrypoints.importlib_metadata is sys.modules["importlib.metadata"]
+print(json.dumps(state))
+"""
+
+
+def test_the_render_program_imports_importlib_metadata_lazily():
+    assert _state(LAZY_METADATA, "render") == {"imported": True, "executed": False, "works": True,
+                                               "numba's and the import's": True}
+    assert _state(LAZY_METADATA, "scenes") == {"imported": True, "executed": True, "works": True,
+                                               "numba's and the import's": True}
 
 
 AHEAD_PROCESS = r"""

@@ -8,19 +8,22 @@ ignored signal stays ignored across ``fork`` and ``exec``, and Python then insta
 handler, nor does asyncio); the parent alone handles it, and stops them (terminates its pool, closes its
 cluster). :func:`host_cores` says how many processes or threads this one may keep busy;
 :func:`declare_own_kernels_only` and :func:`own_kernels_only` say whether this process runs vlref's kernels alone,
-and :func:`not_importable` keeps a package out of an import that does not need it.
+:func:`not_importable` keeps a package out of an import that does not need it, and :func:`imported_lazily` lets
+an import take a module that runs at its first use.
 """
 
 from __future__ import annotations
 
 import contextlib
+import importlib.util
 import os
 import signal
 import sys
 import threading
 from typing import Iterator
 
-__all__ = ["ignoring_sigint", "host_cores", "declare_own_kernels_only", "own_kernels_only", "not_importable"]
+__all__ = ["ignoring_sigint", "host_cores", "declare_own_kernels_only", "own_kernels_only", "not_importable",
+           "imported_lazily"]
 
 _OWN_KERNELS_ONLY = [False]
 
@@ -51,6 +54,25 @@ def not_importable(name: str, when: bool = True) -> Iterator[None]:
     finally:
         if hide and name in sys.modules and sys.modules[name] is None:
             del sys.modules[name]
+
+
+@contextlib.contextmanager
+def imported_lazily(name: str, when: bool = True) -> Iterator[None]:
+    """Inside the block, where ``when`` holds and the module ``name`` is not imported yet, ``import name`` gives a
+    module whose code runs at the first access to one of its attributes (:class:`importlib.util.LazyLoader`, the
+    standard library's recipe for lazy imports): the same module, complete from its first use on, and it stays so
+    after the block. For a module that another package's import imports for work the process may never do."""
+    if when and name not in sys.modules:
+        spec = importlib.util.find_spec(name)
+        if spec is not None and spec.loader is not None and hasattr(spec.loader, "exec_module"):
+            spec.loader = importlib.util.LazyLoader(spec.loader)
+            module = importlib.util.module_from_spec(spec)
+            sys.modules[name] = module
+            spec.loader.exec_module(module)
+            parent, _, child = name.rpartition(".")
+            if parent:
+                setattr(sys.modules[parent], child, module)
+    yield
 
 
 def host_cores() -> int:

@@ -21,7 +21,7 @@ import sys
 import threading
 
 from .. import __version__
-from ..processes import declare_own_kernels_only, not_importable
+from ..processes import declare_own_kernels_only, imported_lazily, not_importable
 from ..work_items import ItemsFailed
 from ..errors import InputError
 
@@ -89,7 +89,7 @@ NUMBA_CONFIG_FILE = ".numba_config.yaml"
 def _numba_alone() -> contextlib.ExitStack:
     """A block in which Numba, where it is still to be imported, is imported without four optional packages that its
     import brings in only for work the process does not do (:func:`vlref.processes.not_importable`; each is a complete
-    import later):
+    import later), and with ``importlib.metadata`` imported lazily (below):
 
     * PyYAML, where the current folder holds no :data:`NUMBA_CONFIG_FILE`: Numba's configuration imports it only to
       read that file (and warns when the file exists without PyYAML); without the file its settings are the same
@@ -106,6 +106,13 @@ def _numba_alone() -> contextlib.ExitStack:
       ``scipy._lib._testutils`` imports Cython to check its version for SciPy's own test helper that builds Cython
       extensions (``cython = None`` where it is missing: nothing else reads it); no Cython code is built here (0.022 s
       of the import on the device, whose Python has Cython installed).
+
+    ``importlib.metadata``, where it is not imported yet, is imported lazily (:func:`vlref.processes.imported_lazily`):
+    Numba's import imports it (``numba.core.entrypoints``) to scan the installed distributions for Numba extensions,
+    a scan this process leaves out (:mod:`vlref.jit_init`); the module (and the ``email``, ``csv`` and ``calendar``
+    modules it imports) runs at its first use, which a render does not make (0.016 s of the import on the dev box; on
+    the device the import's median of 40 fresh processes 0.292 -> 0.275 s, BENCHMARKS.md "The writing: EXR files at
+    deflate level 1").
     """
     fresh = "numba" not in sys.modules
     block = contextlib.ExitStack()
@@ -113,6 +120,7 @@ def _numba_alone() -> contextlib.ExitStack:
     block.enter_context(not_importable("coverage", fresh))
     block.enter_context(not_importable("colorama", fresh))
     block.enter_context(not_importable("cython", fresh and "scipy" not in sys.modules))
+    block.enter_context(imported_lazily("importlib.metadata", fresh))
     return block
 
 
