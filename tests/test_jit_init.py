@@ -3,8 +3,8 @@ unimported, Numba's BLAS check answers as it would have, and linear algebra in a
 works in the same process afterwards. The ``vlref render`` program's own process (it runs vlref's kernels alone)
 initialises Numba without cffi support and extension entry points, and imports it without PyYAML unless Numba has a
 ``.numba_config.yaml`` to read, without coverage.py unless a measurement runs, without colorama or Cython, and with
-``importlib.metadata`` imported lazily; other processes as always. Each case runs in a fresh interpreter (the
-initialisation happens once a process)."""
+``importlib.metadata`` imported lazily, and keeps the NRT's compiled library in a file; other processes as always.
+Each case runs in a fresh interpreter (the initialisation happens once a process)."""
 
 import hashlib
 import json
@@ -255,6 +255,46 @@ def test_the_render_program_imports_numba_without_cython(tmp_path):
 
     assert state("render") == {"cython imported": False, "scipy's test helper sees it": False, "cython works": True}
     assert state("scenes") == {"cython imported": True, "scipy's test helper sees it": True, "cython works": True}
+
+
+RUNTIME_KEPT = r"""
+import hashlib, json, os, sys
+from vlref.cli.commands import program_command
+program_command(sys.argv[1])
+import vlref.jit_init as jit_init
+from numba.core.runtime import nrtdynmod
+path = sys.argv[2]
+jit_init.runtime_file = lambda codegen: path  # this test's file, beside the session's warm kernels
+compiled, create = [], nrtdynmod.create_nrt_module
+nrtdynmod.create_nrt_module = lambda ctx: compiled.append(1) or create(ctx)
+from vlref.render import render
+from vlref.scene import load_scene
+result = render(load_scene(None, ["render.width=16", "render.height=9", "render.steps=2"]))
+import numpy as np
+from numba import njit
+
+@njit(cache=False)
+def user_allocates(n):  # a compile afterwards whose arrays need the NRT
+    return np.arange(n).sum()
+
+print(json.dumps({"compiled": len(compiled), "file": os.path.isfile(path), "user": int(user_allocates(10)),
+                  "final": hashlib.sha256(result.buffers["final"].tobytes()).hexdigest()}))
+"""
+
+
+def test_the_render_program_keeps_the_nrt_library_in_a_file(tmp_path):
+    path = str(tmp_path / "runtime.nrt")
+    first = _state(RUNTIME_KEPT, "render", path)  # no file: Numba's compile, then the file written
+    assert first["compiled"] == 1 and first["file"] and first["user"] == 45
+    second = _state(RUNTIME_KEPT, "render", path)  # the library from the file: nothing compiled
+    assert second == dict(first, compiled=0)
+    ordinary = _state(RUNTIME_KEPT, "scenes", str(tmp_path / "unused.nrt"))  # another command: Numba's own start
+    assert ordinary == dict(first, file=False)  # the same render, no file
+    data = bytearray(open(path, "rb").read())
+    data[-1] ^= 1  # a damaged file: its digest does not check, and the library is compiled and written again
+    open(path, "wb").write(bytes(data))
+    assert _state(RUNTIME_KEPT, "render", path) == first
+    assert _state(RUNTIME_KEPT, "render", path) == second
 
 
 LAZY_METADATA = r"""
