@@ -107,6 +107,7 @@ from numba.core import compiler_lock, entrypoints, event, registry
 from numba.core.codegen import JITCodeLibrary
 from numba.core.runtime import nrtdynmod, rtsys
 
+from .io.files import write_bytes
 from .processes import not_importable, own_kernels_only
 
 __all__ = ["initialise_numba", "object_symbols", "runtime_file", "BLAS_MODULE"]
@@ -311,18 +312,12 @@ def _read_runtime(path: str):
 
 
 def _write_runtime(path: str, state) -> None:
-    """Write ``state`` to ``path`` as :func:`_read_runtime` reads it, through a temporary file renamed into place (a
-    reader sees the whole file or none); where the folder cannot take it, nothing is left there."""
+    """Write ``state`` to ``path`` as :func:`_read_runtime` reads it, atomically (:func:`vlref.io.files.write_bytes`:
+    a reader sees the whole file or none); a folder that cannot take it is left as it was."""
     payload = pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL)
-    temporary = f"{path}.{os.getpid()}.tmp"
-    try:
+    with contextlib.suppress(OSError):
         os.makedirs(os.path.dirname(path), exist_ok=True)
-        with open(temporary, "wb") as fh:
-            fh.write(hashlib.sha256(payload).digest() + payload)
-        os.replace(temporary, path)
-    except OSError:
-        with contextlib.suppress(OSError):
-            os.unlink(temporary)
+        write_bytes(path, hashlib.sha256(payload).digest() + payload)
 
 
 @contextlib.contextmanager
