@@ -171,7 +171,6 @@ def test_the_render_program_imports_numba_without_yaml_unless_numba_has_a_file_t
     assert state("scenes")["yaml imported"]  # another command: Numba's import as always
 
 
-
 WITH_COVERAGE_INSTALLED = r"""
 import json, sys
 if sys.argv[2] == "measured":
