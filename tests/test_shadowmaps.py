@@ -10,7 +10,7 @@ from vlref.camera import camera_from_settings
 from vlref.geometry import build_geometry
 from vlref.lights import pack_lights
 from vlref.lights.shadow_cast import build_shadow_maps, cascade_splits
-from vlref.lights.shadow_lookup import cube_map_coords, shadow_visibility
+from vlref.lights.shadow_lookup import cube_map_coords, pcf_taps, shadow_visibility
 from vlref.lights.shadow_pack import CUBE_FACES
 from vlref.scene.model import (CameraSettings, Light, Material, Plane, Scene, ShadowSettings, Sphere)
 
@@ -160,3 +160,33 @@ def test_cube_map_coords_are_the_face_table_lookup():
         assert u == 0.5 + 0.5 * ((w[0] * right[0] + w[1] * right[1] + w[2] * right[2]) / ma)
         assert v == 0.5 - 0.5 * ((w[0] * up[0] + w[1] * up[1] + w[2] * up[2]) / ma)
     assert cube_map_coords(0.0, 0.0, 0.0)[4] is False
+
+
+@pytest.mark.parametrize("res", [8, 1024, 8192])
+def test_pcf_taps_are_the_clamped_texels_around_the_point_and_their_bilinear_weights(res):
+    """pcf_taps: with ``s = u · res - 1/2`` (and ``t`` for ``v``), the columns ``floor(s)`` and ``floor(s) + 1``
+    and the rows likewise, each clamped to the face, as offsets ``row · res + column``, and the weights of
+    ``s - floor(s)``, ``t - floor(t)``, bit for bit; points far outside the map (beyond 2^63 texels too, and
+    infinite) read the edge texels on their side, NaN reads texel 0. Independently: NumPy's floor and clip on int64
+    texel indices."""
+    rng = np.random.default_rng(5)
+    edge = [-1e300, -np.inf, -3.0, -1.0 / res, 0.0, 0.5 / res, 0.5, 1.0 - 0.5 / res, 1.0, 2.5, 1e19, 1e300, np.inf,
+            np.nan]
+    us = np.concatenate([rng.uniform(-0.2, 1.2, 300), edge, rng.uniform(0.0, 1.0, len(edge))])
+    vs = np.concatenate([rng.uniform(-0.2, 1.2, 300), rng.uniform(0.0, 1.0, len(edge)), edge])
+    for u, v in zip(us, vs):
+        (k00, k10, k01, k11), weights = pcf_taps(float(u), float(v), res)
+        s, t = u * res - 0.5, v * res - 0.5
+
+        def texels(x):
+            if np.isnan(x):
+                return 0, 0
+            f = np.floor(x)
+            return tuple(int(np.clip(f + d, 0, res - 1)) if np.isfinite(f) else (0 if f < 0 else res - 1)
+                         for d in (0.0, 1.0))
+
+        (c0, c1), (r0, r1) = texels(s), texels(t)
+        assert (k00, k10, k01, k11) == (r0 * res + c0, r0 * res + c1, r1 * res + c0, r1 * res + c1), (u, v)
+        if np.isfinite(s) and np.isfinite(t):
+            wu, wv = s - np.floor(s), t - np.floor(t)
+            assert weights == ((1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv)

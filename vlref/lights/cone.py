@@ -60,15 +60,14 @@ def cone_falloff(law, cos_t, cos_outer, cos_inner, half_outer, half_inner, unity
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def cone_polynomial(law, cos_t, cos_outer, cos_inner, unity_a, unity_b):
     """:func:`cone_falloff` for the laws polynomial in ``cos_t`` (``unity``, ``smoothstep``): no call (the
-    ``linear`` law's ``acos`` is one), so the march's lane loops vectorise over it."""
+    ``linear`` law's ``acos`` is one), and selects where the value is 0 or 1, not early returns (with them LLVM kept
+    the march's lane loop scalar on AVX2), so the march's lane loops vectorise over it."""
     zero = cast(cos_t, 0.0)
     one = cast(cos_t, 1.0)
-    if cos_t <= cos_outer:
-        return zero
     if law == CONE_UNITY:
         a = min(max(cos_t * unity_a + unity_b, zero), one)
-        return a * a
-    if cos_t >= cos_inner:
-        return one
-    x = (cos_t - cos_outer) / (cos_inner - cos_outer)
-    return x * x * (cast(cos_t, 3.0) - cast(cos_t, 2.0) * x)
+        inside = a * a
+    else:
+        x = (cos_t - cos_outer) / (cos_inner - cos_outer)
+        inside = one if cos_t >= cos_inner else x * x * (cast(cos_t, 3.0) - cast(cos_t, 2.0) * x)
+    return zero if cos_t <= cos_outer else inside

@@ -40,18 +40,18 @@ def _tap(data, tint, base, tbase, k, d_ref):
 def pcf_taps(u, v, res):
     """The 2x2 PCF taps around ``(u, v)`` on a ``res``² face: texel offsets ``row · res + col`` (clamped to the
     edge) ``(k00, k10, k01, k11)`` and bilinear weights ``(w00, w10, w01, w11)``. Scalars only: the march
-    computes them in a vectorised lane loop. The column is clamped to [-1, res] in floating point before the
-    conversion to a 32-bit integer (the same texels; no overflow far outside the map)."""
+    computes them in a vectorised lane loop. Columns, rows and offsets are integers held in floating point (exact
+    below 2^53), clamped with the bound first (``max(0, NaN)`` is 0: NaN coordinates read texel 0), converted once
+    to 32-bit integers (a face has at most 8192² texels, ``ShadowSettings.resolution``): no 64-bit integer compare
+    or multiply in the lane loop, no overflow far outside the map, and ``np.floor``'s float where ``math.floor``'s
+    int64 went there and back (lane by lane on AVX2; BENCHMARKS.md "The march on AVX2")."""
     su, sv = u * res - 0.5, v * res - 0.5
-    fu, fv = math.floor(su), math.floor(sv)
+    fu, fv = np.floor(su), np.floor(sv)
     wu, wv = su - fu, sv - fv
-    edge = float(res)
-    c0 = np.int32(min(max(fu, -1.0), edge)) + 0  # int32: a packed conversion on AVX2 (int64 has none)
-    r0 = np.int32(min(max(fv, -1.0), edge)) + 0
-    c0c, c1c = min(max(c0, 0), res - 1), min(max(c0 + 1, 0), res - 1)
-    r0c, r1c = min(max(r0, 0), res - 1), min(max(r0 + 1, 0), res - 1)
-    top, bottom = r0c * res, r1c * res
-    return ((top + c0c, top + c1c, bottom + c0c, bottom + c1c),
+    last, size = float(res - 1), float(res)
+    c0, c1 = min(max(0.0, fu), last), min(max(0.0, fu + 1.0), last)
+    top, bottom = min(max(0.0, fv), last) * size, min(max(0.0, fv + 1.0), last) * size
+    return ((np.int32(top + c0) + 0, np.int32(top + c1) + 0, np.int32(bottom + c0) + 0, np.int32(bottom + c1) + 0),
             ((1 - wu) * (1 - wv), wu * (1 - wv), (1 - wu) * wv, wu * wv))
 
 
