@@ -1,8 +1,9 @@
 """Progress of long kernels and clean interrupts.
 
 * The physical march is one launch, watched: progress while it runs, a signal stops it within a tile's time, and
-  no launch is left running; the quadrature reference reports progress once per band of rows. Neither the bands
-  nor the order in which threads take tiles changes a bit of a result.
+  no launch is left running; a thread's launches run on one launch thread, kept between them; the quadrature
+  reference reports progress once per band of rows. Neither the bands nor the order in which threads take tiles
+  changes a bit of a result.
 * SIGINT / SIGTERM during every long command (render, render --frames, reference, bias, sweep, golden
   build / verify, march, bench, warmup), in this process or on a ``--scheduler local:2`` cluster: one line
   ``vlref: interrupted``, exit 130 / 143, no traceback (nor from a child process), no output folder and no
@@ -128,6 +129,38 @@ def test_watched_raises_the_launchs_error_and_lets_an_exception_go_on_only_once_
     with pytest.raises(RuntimeError, match="from the listener"), reporting(listener):
         progress.watched(endless, taken, 1000, 100)
     assert ended == [progress.EXHAUSTED]  # stopped by the counter, before the exception went on
+
+
+def test_a_threads_launches_run_on_one_launch_thread_kept_between_them_which_ends_with_that_thread(monkeypatch):
+    """Every watched launch of one thread runs on the same launch thread (a daemon, named vlref-launch while it runs
+    a launch, vlref-launch (idle) after): its OpenMP team is made once. Another thread's launches run on a launch
+    thread of their own, which ends once that thread has ended; a forked child (another pid) gets a new one."""
+    seen = []
+
+    def launch():
+        seen.append((threading.get_ident(), threading.current_thread().name))
+
+    def watch():
+        progress.watched(launch, np.zeros(1, dtype=np.int64), 1, 1)
+
+    watch()
+    watch()
+    assert seen[0] == seen[1] and seen[0][0] != threading.get_ident() and seen[0][1] == "vlref-launch"
+    kept = {t.ident: t for t in threading.enumerate()}[seen[0][0]]
+    assert kept.daemon and kept.name == "vlref-launch (idle)"
+    other = threading.Thread(target=watch)
+    other.start()
+    other.join()
+    assert seen[2][0] not in (seen[0][0], threading.get_ident())
+    deadline = time.monotonic() + 10
+    while any(t.ident == seen[2][0] for t in threading.enumerate()) and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert not any(t.ident == seen[2][0] for t in threading.enumerate()) and kept.is_alive()
+    monkeypatch.setattr(progress._launch_threads.kept, "pid", -1)  # as a forked child sees its parent's object
+    watch()
+    assert seen[3][0] != seen[0][0]
+    watch()
+    assert seen[4] == seen[3]
 
 
 def test_a_small_march_runs_on_the_calling_thread_and_reports_its_end():

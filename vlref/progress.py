@@ -6,13 +6,18 @@ it returns, so a progress bar cannot move and Ctrl-C waits for the end. Two ways
 * **One launch, watched** (:func:`watched`; the physical march). The kernel releases the GIL (``nogil=True``) and
   its threads take tasks from a counter (:func:`vlref.parallel.take`). It runs on a thread of its own while the
   calling thread waits on it, reading the counter every :data:`POLL_S` for the listener and handling signals (a
-  lock's wait is interrupted by them). When anything interrupts the wait (Ctrl-C or SIGTERM raising in the main
-  thread, a listener's error), the counter is set past every task: each kernel thread ends with the task it holds
-  (a tile: milliseconds), the launch returns, and only then does the exception go on, so no other parallel launch
-  ever overlaps this one (Numba's ``workqueue`` threading layer aborts on that) and no array the kernel borrows is
-  freed under it. One launch instead of bands: no launch, tail and first touch of the outputs per band (in one
-  process 16 bands of (b) at 1080p took 0.05 s more than one on a 16-core server, BENCHMARKS.md "The march in fewer
-  bands"; a fresh render's volumetric stage ~0.026 s less, "The march in one launch, watched").
+  lock's wait is interrupted by them). That thread is the calling thread's *launch thread*, made at its first launch
+  and kept for the next: a daemon, named ``vlref-launch`` while it runs a launch and ``vlref-launch (idle)`` between
+  launches, which ends once the calling thread has ended. A thread that starts a parallel kernel gets an OpenMP team
+  of worker threads of its own, so a new thread per launch made a new team each time: 12-16 ms more than a launch
+  from the calling thread, of a 0.21 s march (scene (a) at 1080p on 16 cores; BENCHMARKS.md "The launch thread
+  kept"). When anything interrupts the wait (Ctrl-C or SIGTERM raising in the main thread, a listener's error), the
+  counter is set past every task: each kernel thread ends with the task it holds (a tile: milliseconds), the launch
+  returns, and only then does the exception go on, so no other parallel launch ever overlaps this one (Numba's
+  ``workqueue`` threading layer aborts on that) and no array the kernel borrows is freed under it. One launch
+  instead of bands: no launch, tail and first touch of the outputs per band (in one process 16 bands of (b) at 1080p
+  took 0.05 s more than one on a 16-core server, BENCHMARKS.md "The march in fewer bands"; a fresh render's
+  volumetric stage ~0.026 s less, "The march in one launch, watched").
 * **Bands of rows** (:func:`row_bands`; the quadrature reference). The kernel runs once per band; between bands
   the interpreter runs (signal handlers included) and the band is reported.
 
@@ -26,7 +31,10 @@ from __future__ import annotations
 import contextlib
 import contextvars
 import math
+import os
+import queue
 import threading
+import weakref
 from typing import Callable, Iterator
 
 import numba
@@ -82,11 +90,57 @@ def row_bands(height: int, bands: int | None = None, multiple: int = 1) -> Itera
             listener(y1, height)
 
 
+class _LaunchThread:
+    """A daemon thread that runs the callables handed to :meth:`start` one at a time (module docstring).
+
+    The thread holds only the queue, not this object: when the calling thread that owns this object has ended and it
+    is collected, its finalizer hands the thread ``None`` and the thread ends."""
+
+    IDLE = "vlref-launch (idle)"
+    BUSY = "vlref-launch"
+
+    def __init__(self) -> None:
+        self.pid = os.getpid()  # a forked child has the object but not the thread
+        self._work: queue.SimpleQueue = queue.SimpleQueue()
+        threading.Thread(target=_serve, args=(self._work,), name=self.IDLE, daemon=True).start()
+        weakref.finalize(self, self._work.put, None)
+
+    def start(self, launch: Callable[[], None]) -> threading.Event:
+        """Hand ``launch`` to the thread; the event is set once it has returned or raised."""
+        done = threading.Event()
+        self._work.put((launch, done))
+        return done
+
+
+def _serve(work: queue.SimpleQueue) -> None:
+    """The launch thread's loop: run each callable (it catches its own exceptions), then set its event."""
+    me = threading.current_thread()
+    while (item := work.get()) is not None:
+        launch, done = item
+        me.name = _LaunchThread.BUSY
+        try:
+            launch()
+        finally:
+            me.name = _LaunchThread.IDLE
+            done.set()
+
+
+_launch_threads = threading.local()
+
+
+def _launch_thread() -> _LaunchThread:
+    """The calling thread's launch thread, made on first use (and again in a forked child)."""
+    kept = getattr(_launch_threads, "kept", None)
+    if kept is None or kept.pid != os.getpid():
+        kept = _launch_threads.kept = _LaunchThread()
+    return kept
+
+
 def watched(launch: Callable[[], None], taken: np.ndarray, tasks: int, height: int, threaded: bool = True) -> None:
-    """Run ``launch()`` on a thread of its own and wait for it, reporting progress and handling signals here (module
-    docstring). ``launch`` calls a parallel kernel compiled ``nogil=True`` whose threads take the tasks ``0 ..
-    tasks - 1`` (in row order of a frame of ``height`` rows) from ``taken``, a 1-element int64 array holding 0
-    (:func:`vlref.parallel.take`), and nothing else. Its thread runs with this thread's Numba thread count.
+    """Run ``launch()`` on the calling thread's launch thread and wait for it, reporting progress and handling signals
+    here (module docstring). ``launch`` calls a parallel kernel compiled ``nogil=True`` whose threads take the tasks
+    ``0 .. tasks - 1`` (in row order of a frame of ``height`` rows) from ``taken``, a 1-element int64 array holding 0
+    (:func:`vlref.parallel.take`), and nothing else. It runs with this thread's Numba thread count.
 
     While it runs, the listener (if any) gets ``(rows, height)`` whenever ``rows = min(height - 1, taken · height //
     tasks)`` (the tasks handed out, in rows) has grown since the last report, and ``(height, height)`` once it has
@@ -96,7 +150,7 @@ def watched(launch: Callable[[], None], taken: np.ndarray, tasks: int, height: i
     here.
 
     ``threaded`` False (a launch too short for a bar or an interrupt to matter): ``launch()`` runs on this thread, then
-    the listener gets ``(height, height)``; no thread to start (0.5-3.5 ms more per launch on the busy dev box:
+    the listener gets ``(height, height)``; no thread to hand it to (0.5-3.5 ms more per launch on the busy dev box:
     BENCHMARKS.md "The march in one launch, watched")."""
     listener = _listener.get()
     if not threaded:
@@ -114,22 +168,21 @@ def watched(launch: Callable[[], None], taken: np.ndarray, tasks: int, height: i
         except BaseException as exc:  # raised again in the waiting thread
             failed.append(exc)
 
-    thread = threading.Thread(target=run, name="vlref-launch", daemon=True)
-    thread.start()
+    done = _launch_thread().start(run)
     try:
         reported = 0
-        while thread.is_alive():
-            thread.join(None if listener is None else POLL_S)
+        while not done.is_set():
+            done.wait(None if listener is None else POLL_S)
             rows = min(height - 1, int(taken[0]) * height // max(1, tasks))
-            if listener is not None and thread.is_alive() and rows > reported:
+            if listener is not None and not done.is_set() and rows > reported:
                 listener(rows, height)
                 reported = rows
     finally:
-        if thread.is_alive():  # interrupted: stop the launch, then let the exception go on
+        if not done.is_set():  # interrupted: stop the launch, then let the exception go on
             taken[0] = EXHAUSTED
-            while thread.is_alive():
+            while not done.is_set():
                 try:
-                    thread.join()
+                    done.wait()
                 except BaseException:
                     pass
     if failed:
