@@ -93,6 +93,16 @@ def test_radial_same_bits_as_the_pixel_loop(address, light):
         assert np.array_equal(got, (listing_13_1(img, light, 10, 10, 0.8, 0.5, 1.0, 0.95, address) * 0.37) * 0.5)
 
 
+@pytest.mark.parametrize("address", ["clamp", "border"])
+@pytest.mark.parametrize("light", [(1e25, 0.5), (0.4, -3e21), (-1e300, 1e300)])
+def test_a_light_beyond_two_to_the_63_texels_clamps_its_taps_on_its_own_side(address, light):
+    # the taps toward a light that far off screen leave the image on the light's side: clamped to that edge (or its
+    # border); an integer conversion of floor(x) overflows there (the other edge was read)
+    img = image(np.random.default_rng(13), 6, 9, 3)
+    got = radial_blur(img, light, 8, 0.9, 0.5, 0.95, 0.37, address)
+    assert np.array_equal(got, listing_13_1(img, light, 8, 8, 0.9, 0.5, 1.0, 0.95, address) * 0.37)
+
+
 def test_radial_density_one_ends_on_the_light():
     # with Density = 1 the n-th tap sits on the light: a delta-like image at the light's texel
     # reaches every pixel with weight Decay^(n-1) * Weight

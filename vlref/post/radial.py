@@ -111,8 +111,10 @@ def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
     ``C`` channels, ``ia``, ``ib`` (``column * C``, unsigned: an index that needs no sign check).
 
     Texel ``i`` is column ``i mod W`` when ``repeat``, else ``clamp(i, lo, hi) + offset``; the clamp is taken on
-    the integral float ``floor(x)`` (the same index as clamping the integer, and no integer overflow far off
-    screen). :func:`_fetch_add`'s arithmetic, operation for operation.
+    the integral float ``np.floor(x)``, the bound first, then converted to int32 (the same index as clamping the
+    integer, and no integer overflow far off screen, where ``math.floor``'s int64 read the other edge beyond 2^63
+    texels; AVX2 converts int64 lane by lane, and with them the blur took 1.45x as long: BENCHMARKS.md "The radial
+    blur on AVX2"). :func:`_fetch_add`'s arithmetic, operation for operation.
     """
     prefer_wide_vectors()
     if repeat:
@@ -125,10 +127,10 @@ def _tap_columns(u, n, W, C, lo, hi, offset, repeat, tx, ia, ib):
     else:
         for x in range(n):
             xx = u[x] * W - 0.5
-            xf = math.floor(xx)
+            xf = np.floor(xx)
             tx[x] = xx - xf
-            ia[x] = (int(min(max(xf, lo), hi)) + offset) * C
-            ib[x] = (int(min(max(xf + 1.0, lo), hi)) + offset) * C
+            ia[x] = (np.int32(min(max(lo, xf), hi)) + offset) * C
+            ib[x] = (np.int32(min(max(lo, xf + 1.0), hi)) + offset) * C
 
 
 @njit(cache=True, fastmath=False)
@@ -239,7 +241,7 @@ def _tap_rows_rgb(flat, ra, rb, ty, tx, ia, ib, n, w, acc, row):
 def _row_index(yf, n, lo, hi, offset, repeat):
     """Array row of texel row ``yf`` (an integral float) of ``n``: ``yf mod n`` when ``repeat``, else
     ``clamp(yf, lo, hi) + offset`` (clamped as :func:`_tap_columns` does)."""
-    return int(yf) % n if repeat else int(min(max(yf, lo), hi)) + offset
+    return int(yf) % n if repeat else np.int32(min(max(lo, yf), hi)) + offset
 
 
 RADIAL_RUN = 16
@@ -286,7 +288,7 @@ def _radial_run(img, H, W, loop, mode, tile_w, first, end, buffers, out):
                 w = dec * tap_scale * weight
                 dec = dec * decay
             yy = v * H - 0.5
-            yf = math.floor(yy)
+            yf = np.floor(yy)
             ra = np.uint64(_row_index(yf, H, lo_y, hi_y, offset, repeat)) * row
             rb = np.uint64(_row_index(yf + 1.0, H, lo_y, hi_y, offset, repeat)) * row
             _tap_columns(u, n, W, C, lo_x, hi_x, offset, repeat, tx, ia, ib)
