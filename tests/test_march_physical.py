@@ -124,6 +124,28 @@ def test_the_light_leg_of_a_homogeneous_medium_is_exp_of_sigma_t_times_the_dista
     assert on[0, 0, 0, 0] / off[0, 0, 0, 0] == pytest.approx(math.exp(-sigma_t * dist), rel=1e-12)
 
 
+@pytest.mark.parametrize("fog", [None, HeightFog(base=-1.0, falloff=0.3)])
+def test_the_pixel_transmittance_is_exp_of_the_optical_depth_to_the_ray_end(fog):
+    """An unbounded noiseless medium (the march's view transmittances in a loop of their own): T = exp(-τ(0, t_end)),
+    τ = σt t_end, with a height fog σt e^{e(o)} (1 - e^{-k d_y t_end}) / (k d_y), e(o) = -(o_y - base) k; a ray that
+    ends at the eye (t_end = 0) keeps T = 1. 19 x 11 pixels: partial tiles on the right and at the bottom."""
+    medium = Medium(scattering=0.05, absorption=0.02, height_fog=fog)
+    cam = CameraSettings(position=(0.0, 1.0, 0.0), look_at=(0.0, 0.4, 1.0), fov=60.0)
+    light = Light(type="point", position=(0.0, 1.0, 3.0), intensity=1.0, range=5.0)
+    scene = _scene([light], medium=medium, cam=cam, w=19, h=11, max_distance=20.0)
+    distance = np.linspace(0.0, 25.0, 11 * 19).reshape(11, 19)
+    trans, c = _run(scene, 4, 0.5, distance=distance)[1:]
+    t_end, dy = np.minimum(distance, 20.0), c.ray_directions()[..., 1]
+    if fog is None:
+        tau = 0.07 * t_end
+    else:
+        assert (dy < 0).all()
+        k = fog.falloff
+        tau = 0.07 * math.exp(-(1.0 - fog.base) * k) * -np.expm1(-k * dy * t_end) / (k * dy)
+    assert trans[0, 0] == 1.0 and (trans[1:] < 1.0).all()
+    np.testing.assert_allclose(trans, np.exp(-tau), rtol=1e-13, atol=0)
+
+
 def hg_np(c, g):
     return (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * np.asarray(c)) ** 1.5)
 

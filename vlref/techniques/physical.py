@@ -9,6 +9,12 @@ Settings: ``render.steps`` and ``render.sampling`` (defaults ``techniques.physic
 ``techniques.physical.light_extinction``. The march runs at the frame's full resolution (the
 technique has no post passes, so ``render.resolution`` does not apply). With noise the light leg
 uses ``ceil(sqrt(steps))`` midpoint sub-steps, whose O(1/steps) error matches the march's own order.
+
+Performance: the march's outputs are new memory, which the operating system maps (and zeroes) on its first write, a
+huge page of 2 MB at a time; the march takes its tiles in row order, so its threads all reached each page at once and
+waited for its one mapping (1080p, one light: 6-10 ms more than into outputs already mapped, on the device). They are
+mapped first, a block of rows per thread (:func:`vlref.row_blocks.in_row_blocks`, NumPy's fill without the GIL), with
+the rays' ends ``min(distance, render.max_distance)``.
 """
 
 from __future__ import annotations
@@ -23,6 +29,7 @@ from ..march.physical import march_physical, march_tiles
 from ..medium import pack_medium
 from ..post.composite import sum_and_composite
 from ..progress import watched
+from ..row_blocks import in_row_blocks
 from ..scene.technique_params import resolved
 
 __all__ = ["render", "march_buffers", "SAMPLES_WATCHED"]
@@ -42,12 +49,19 @@ def march_buffers(scene, camera, gbuffer_distance, lights, shadow_maps, geo, ste
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
     h, w = gbuffer_distance.shape
     dirs = camera.ray_directions(w, h, copy=False).astype(dtype, copy=False)  # read only
-    t_end = np.minimum(gbuffer_distance, scene.render.max_distance).astype(dtype, copy=False)
     beta = offsets(sampling, w, h, scene.render.seed).astype(dtype, copy=False)
     medium = pack_medium(scene, dtype)
     packed = lights.astype(dtype)
+    t_end = np.empty((h, w), dtype=dtype)
     per_light = np.empty((packed.count, h, w, 3), dtype=dtype)  # the march writes every element
     trans = np.empty((h, w), dtype=dtype)
+
+    def prepare(y0: int, y1: int) -> None:  # the rays' ends, and the outputs mapped first (module docstring)
+        np.minimum(gbuffer_distance[y0:y1], scene.render.max_distance, out=t_end[y0:y1])
+        per_light[:, y0:y1].fill(0)
+        trans[y0:y1].fill(0)
+
+    in_row_blocks(h, w, prepare)
     # The frame is marched in one launch, watched where it is long (SAMPLES_WATCHED)
     position = np.asarray(camera.position, dtype=dtype)
     # the geometry only where a light traces shadow rays: with None the march compiles without the ray tracer
