@@ -36,8 +36,8 @@ processes (before the child's exit, which may end the process at once)."""
 
 def _with_cpu(child: str) -> str:
     lines = child.split("\n")
-    report = max(i for i, line in enumerate(lines) if line.startswith("print(json.dumps("))
-    return "\n".join(lines[:report + 1] + CPU.strip("\n").split("\n") + lines[report + 1:])
+    end = max(i for i, line in enumerate(lines) if line.startswith("exit_at_once("))  # after the report, before the exit
+    return "\n".join(lines[:end] + CPU.strip("\n").split("\n") + lines[end:])
 
 WARM = r'''
 import json, sys
