@@ -69,13 +69,13 @@ def main(cpu: str = "emeraldrapids") -> None:
         proc = subprocess.run([sys.executable, "-c", COMPILE, path], env=env, capture_output=True, text=True)
     if proc.returncode:
         raise SystemExit(proc.stderr[-3000:])
-    lines = collections.defaultdict(set)
+    lines = collections.defaultdict(collections.Counter)
     for match in re.finditer(r"remark: (\S+?):(\d+):\d+: (.*)", proc.stderr):
         message = match.group(3)
-        if "interleav" not in message and "already been vectorized" not in message:
-            lines[(match.group(1), int(match.group(2)))].add(message[:100])
+        if "indicates that interleaving" not in message and "already been vectorized" not in message:
+            lines[(match.group(1), int(match.group(2)))][message[:100]] += 1
     for (source, line), messages in sorted(lines.items()):
-        done = sorted(m for m in messages if m.startswith("vectorized"))
+        done = sorted(f"{m} x{n}" for m, n in messages.items() if m.startswith("vectorized"))
         print(f"{'VECTOR' if done else 'scalar'} {source}:{line}: {'; '.join(done or sorted(messages))}")
 
 
