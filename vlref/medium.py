@@ -50,9 +50,9 @@ from .jit import njit
 from .numeric import cast, exp, is_float64
 
 __all__ = ["PackedMedium", "pack_medium", "noise_lattice", "load_noise_volume", "density", "smooth_density", "sigma",
-           "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "interval_optical_depth",
-           "fog_exponent", "height_exponent", "fog_mean_factor", "FOG_SERIES_BELOW", "in_bounds", "box_contains",
-           "step_source_weight", "light_leg_attenuates", "FOG_MAX_EXPONENT"]
+           "noise_value", "clip_to_bounds", "optical_depth", "smooth_optical_depth", "fog_exponent", "height_exponent",
+           "fog_mean_factor", "FOG_SERIES_BELOW", "in_bounds", "box_contains", "step_source_weight",
+           "light_leg_attenuates", "FOG_MAX_EXPONENT"]
 
 FOG_MAX_EXPONENT = 60.0
 (M_SS, M_ST, M_G, M_FOG, M_FOG_BASE, M_FOG_K, M_BOUNDED, M_BX0, M_BY0, M_BZ0, M_BX1, M_BY1, M_BZ1, M_NOISE,
@@ -253,20 +253,13 @@ def _smooth_depth(mp, oy, dy, a, b):
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
-def interval_optical_depth(mp, oy, dy, a, b):
-    """:func:`optical_depth` of a medium without noise over ``[a, b]`` inside its box (all of an unbounded medium's
-    rays): 0 for ``b <= a`` or ``σt = 0``, else ``σt L`` or the height fog's closed form. One expression, no early
-    return, so a lane loop of it vectorises (the march's view transmittances)."""
-    zero = cast(oy, 0.0)
-    tau = _smooth_depth(mp, oy, dy, a, b)
-    return tau if (b - a > zero) & (mp[M_ST] != zero) else zero  # '&': both evaluated, a select, no branch
-
-
-@njit(cache=True, fastmath=False, error_model="numpy", forceinline=True)
 def smooth_optical_depth(mp, ox, oy, oz, dx, dy, dz, t0, t1):
     """:func:`optical_depth` of a medium without noise (no loop, no call: the march's lane loops vectorise it)."""
+    zero = cast(ox, 0.0)
     a, b = clip_to_bounds(mp, ox, oy, oz, dx, dy, dz, t0, t1)
-    return interval_optical_depth(mp, oy, dy, a, b)
+    if not b - a > zero or mp[M_ST] == zero:
+        return zero
+    return _smooth_depth(mp, oy, dy, a, b)
 
 
 @njit(cache=True, fastmath=False, forceinline=True)

@@ -100,8 +100,8 @@ Performance (how the sum above is evaluated; none of it changes a bit; BENCHMARK
   (:func:`vlref.medium.fog_mean_factor`, a series below its cut), where the closed form's ``(1 - e^{-δ})/δ``
   took an ``expm1`` per sample (BENCHMARKS.md "The fog leg without its expm1").
 * Outside the steps (a sixth of a 1080p march of one light on the device; BENCHMARKS.md "The march outside its
-  steps"): each pixel's view transmittance in an unbounded noiseless medium in a loop of its own
-  (:func:`_open_transmittance`, the closed form without the slab test's early returns), the fog's running product
+  steps"): each pixel's view transmittance in a noiseless medium in a loop of its own (:func:`_smooth_transmittance`,
+  the closed form without :func:`~vlref.medium.optical_depth`'s noise loop), the fog's running product
   set up per lane without branches (``max`` and ``min`` written out: Numba's builtins stayed calls in that loop),
   and a packet's radiance stored by its pixels' flat index (no division per lane). All of them vectorise.
 * Compilation: counts and flags are passed as ``np.int64`` / plain ``bool`` values, never literals (a
@@ -136,8 +136,8 @@ from ..lights.shadow_pack import (SHADOW_EXACT, SHADOW_NONE, SHADOW_PCF, S_CASC,
                                   S_STRENGTH)
 from ..medium import (FOG_MAX_EXPONENT, M_BOUNDED, M_BX0, M_BX1, M_BY0, M_BY1, M_BZ0, M_BZ1, M_FOG, M_FOG_BASE,
                       M_FOG_K, M_G, M_NOISE, M_SS, M_ST, box_contains, clip_to_bounds, density, fog_mean_factor,
-                      fog_exponent, height_exponent, interval_optical_depth, light_leg_attenuates, optical_depth,
-                      smooth_optical_depth, step_source_weight)
+                      fog_exponent, height_exponent, light_leg_attenuates, optical_depth, smooth_optical_depth,
+                      step_source_weight)
 from ..numeric import arrays_do_not_overlap, cast, exp, expm1, is_float64, prefer_wide_vectors, zero_one
 from ..parallel import COUNTER, WORKERS, borrowed, take, work
 from ..phase import hg
@@ -614,14 +614,14 @@ def _march_packet(s, q, taps, n, pix, w, k, steps, origin, medium, lights, shado
 
 
 @njit(cache=True, fastmath=False, error_model="numpy")
-def _open_transmittance(mp, oy, dirs, t_end, first, end, out):
+def _smooth_transmittance(mp, ox, oy, oz, dirs, t_end, first, end, out):
     """``out[j] = exp(-τ(0, t_end[j]))`` along ``dirs[j]`` for ``first <= j < end`` (a row of pixels) in a medium
-    without noise or bounds: :func:`~vlref.medium.optical_depth`'s closed form, in a loop that vectorises."""
+    without noise: :func:`~vlref.medium.smooth_optical_depth`, in a loop that vectorises."""
     prefer_wide_vectors()
     arrays_do_not_overlap()
     zero = cast(oy, 0.0)
     for j in range(first, end):
-        out[j] = exp(-interval_optical_depth(mp, oy, dirs[j, 1], zero, t_end[j]))
+        out[j] = exp(-smooth_optical_depth(mp, ox, oy, oz, dirs[j, 0], dirs[j, 1], dirs[j, 2], zero, t_end[j]))
 
 
 @njit(cache=True, fastmath=False, error_model="numpy", by_address=True)
@@ -643,7 +643,7 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
     taps = np.empty(5 * LANES, dtype=np.uint64)
     pix = np.empty(LANES, dtype=np.int64)
     zero, _ = zero_one(s)
-    open_smooth = mp[M_NOISE] == zero and mp[M_BOUNDED] == zero  # a medium without noise or bounds
+    smooth = mp[M_NOISE] == zero  # a medium without noise: the view transmittances' closed form
     tiles_x = (w + TILE_W - 1) // TILE_W
     tiles = tiles_x * ((end - first + TILE_H - 1) // TILE_H)
     while True:
@@ -653,8 +653,8 @@ def _march_tasks(taken, rows, steps, light_extinction, leg_steps, origin, dirs, 
         i0, j0 = first + (task // tiles_x) * TILE_H, (task % tiles_x) * TILE_W
         i1, j1 = min(end, i0 + TILE_H), min(w, j0 + TILE_W)
         for i in range(i0, i1):  # the pixel's transmittance, Beer–Lambert from the eye to t_end
-            if open_smooth:
-                _open_transmittance(mp, oy, dirs[i], t_end[i], j0, j1, transmittance[i])
+            if smooth:
+                _smooth_transmittance(mp, ox, oy, oz, dirs[i], t_end[i], j0, j1, transmittance[i])
             else:
                 for j in range(j0, j1):
                     transmittance[i, j] = exp(-optical_depth(mp, lattice, ox, oy, oz, dirs[i, j, 0], dirs[i, j, 1],
