@@ -1,7 +1,7 @@
 # The reference's whole call against main (also under OMP_WAIT_POLICY=passive, a probe), the frame's split and Mitsuba 3
 # in one device call (BENCHMARKS.md, "The reference's fixed costs: one worker per thread, the frame without NumPy's
 # generic paths"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN and the Mitsuba
-# bundle in .dev/mitsuba-bundle; results under $OUT:
+# bundle in .dev/mits.tar.xz (benchmarks/mitsuba_device.sh); results under $OUT:
 #     bash .dev/TREE/benchmarks/reference_call_device.sh TREE MAIN
 # PROBES=0 leaves out the OMP_WAIT_POLICY=passive probe and the frame's split; ONE_THREAD=1 adds an A/B on one Numba
 # thread (BENCHMARKS.md, "The integrand compiled into the quadrature's loop"). warm_*.txt end with the cold process's
@@ -12,7 +12,7 @@ export PYTHONUNBUFFERED=1
 (nproc; lscpu | grep -E "Model name|Thread|Core|Socket|NUMA node\(s\)"
  python3 -c "import numba, numpy; print('numba', numba.__version__, 'numpy', numpy.__version__)") > $OUT/machine.txt 2>&1
 start=$(date +%s)
-python3 .dev/mitsuba-bundle/unpack.py .dev/mitsuba-bundle /tmp/mits > /dev/null 2>&1 &
+bash benchmarks/mitsuba_device.sh unpack > /dev/null &
 ab() {  # tree dir, tag, Numba cache, arguments
   (cd $1 && NUMBA_CACHE_DIR=$3 PYTHONPATH=$1 python3 $AB --tag $2 "${@:4}")
 }
@@ -46,7 +46,8 @@ if [ "${PROBES:-1}" = 1 ]; then
   done
   echo "split: $(( $(date +%s) - start )) s" >> $OUT/machine.txt
 fi
-(cd $T && NUMBA_CACHE_DIR=/tmp/nc_tree PYTHONPATH=$T:/tmp/mits/site LD_LIBRARY_PATH=/tmp/mits/lib \
+eval "$(bash benchmarks/mitsuba_device.sh unpack)"
+(cd $T && NUMBA_CACHE_DIR=/tmp/nc_tree PYTHONPATH=$T:/tmp/mits/site \
   python3 benchmarks/mitsuba_ratio.py --width 80 --height 45 --spp 1024,1024 --mitsuba-budget 10 --repeats 5 \
   --vlref 7e-1/1/3,1/1/3,5e-1/1/3 --out $OUT/m80.json > $OUT/m80.txt 2>&1)
 echo "all: $(( $(date +%s) - start )) s" >> $OUT/machine.txt

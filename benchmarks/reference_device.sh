@@ -1,11 +1,12 @@
 # The reference against main and Mitsuba 3 in one device call (BENCHMARKS.md, "The reference at Mitsuba's warm 1024
 # spp launch"). Run from the lead's checkout root with this tree in .dev/TREE, main in .dev/MAIN, optionally an
-# earlier state of this tree in .dev/PREV, and the Mitsuba bundle in .dev/mitsuba-bundle:
+# earlier state of this tree in .dev/PREV, and the Mitsuba bundle in .dev/mits.tar.xz
+# (benchmarks/mitsuba_device.sh):
 #     bash .dev/TREE/benchmarks/reference_device.sh TREE MAIN [PREV]
 set -u
 T=$PWD/.dev/$1 M=$PWD/.dev/$2 P=${3:+$PWD/.dev/$3} OUT=${OUT:-/tmp/out}
-python3 .dev/mitsuba-bundle/unpack.py .dev/mitsuba-bundle /tmp/mits > /dev/null
-export LD_LIBRARY_PATH=/tmp/mits/lib PYTHONUNBUFFERED=1
+eval "$(bash benchmarks/mitsuba_device.sh unpack)"
+export PYTHONUNBUFFERED=1
 ab() {  # tree dir, tag, cache, settings
   (cd $1 && NUMBA_CACHE_DIR=$3 PYTHONPATH=$1 python3 benchmarks/reference_ab.py --tag $2 --repeats 9 --one-thread \
      --vlref $4)
