@@ -37,13 +37,11 @@ run)
   eval "$(bash "$0" unpack)"
   export PYTHONPATH=$PWD:/tmp/mits/site NUMBA_CACHE_DIR=${NUMBA_CACHE_DIR:-/tmp/nc} PYTHONUNBUFFERED=1
   lscpu | grep -E "Model name|^CPU\(s\)"
-  for k in "${@:-1 2}"; do
-    for run in $k; do
-      python3 benchmarks/mitsuba_ratio.py --width 80 --height 45 --spp 1024,1024,4096,16384 --mitsuba-budget 20 \
-        --repeats 3 --one-thread --vlref 1e-4/512/15,1/1/3,5e-1/1/3,3e-1/1/3,7e-1/1/3,2/1/3 \
-        --out "$OUT/m80_$run.json" > "$OUT/m80_$run.txt" 2>&1
-      grep -E "^(vlref|mitsuba|same error)" "$OUT/m80_$run.txt"
-    done
+  for run in ${*:-1 2}; do
+    python3 benchmarks/mitsuba_ratio.py --width 80 --height 45 --spp 1024,1024,4096,16384 --mitsuba-budget 20 \
+      --repeats 3 --one-thread --vlref 1e-4/512/15,1/1/3,5e-1/1/3,3e-1/1/3,7e-1/1/3,2/1/3 \
+      --out "$OUT/m80_$run.json" > "$OUT/m80_$run.txt" 2>&1
+    grep -E "^(vlref|mitsuba|same error)" "$OUT/m80_$run.txt"
   done
   ;;
 *)
