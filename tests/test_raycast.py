@@ -194,7 +194,7 @@ def test_rays_left_out_of_the_primitive_tree_give_the_same_bits():
             getattr(every, name)[...] = np.nan
         every.object_id[...] = -7
         args = list(kernel_args(geo, cam, every))
-        args[2] = np.tile(np.array([0, 64], dtype=np.int64), (36, 1))  # every ray through the tree
+        args[1] = np.tile(np.array([0, 64], dtype=np.int64), (36, 1))  # every ray through the tree
         _raycast_kernel(*args, work(_cast_rows, COUNTER, *args), 2)
         for name in ("depth", "distance", "normal", "object_id"):
             assert getattr(culled, name).tobytes() == getattr(every, name).tobytes(), name

@@ -26,9 +26,10 @@ Sections of the report (``--json`` prints it as one JSON object; keys as below):
 ``raycast``       the G-buffer (primary rays/s); ``shadow_maps``: the four lights' maps (texels/s), and,
                   without ``--quick``, raycast and shadow maps of the bundled ``forest``, ``cage``, ``window``.
 ``post``          each post pass on a full-resolution frame (min-downsample, the three depth-aware
-                  upsamples, bilateral blur H+V into two new arrays and, as Killzone calls it, its vertical
-                  pass into a buffer of the caller's, radial blur, composite) and the ``preview`` render
-                  (``killzone``, half resolution, 16 steps, post passes included).
+                  upsamples, the bilateral blur's horizontal and vertical passes one at a time, both into two
+                  new arrays and, as Killzone calls them, the vertical pass into a buffer of the caller's, radial
+                  blur, composite) and the ``preview`` render (``killzone``, half resolution, 16 steps, post
+                  passes included).
 ``reference``     :func:`vlref.reference.render_reference` at ``rel_tol = 1e-4`` on a reduced
                   resolution of (a) (the same frustum): seconds per pixel, and the estimate for 640x360.
 ``first_render``  a fresh interpreter that imports vlref, renders (a) at 320x180 and writes its outputs as

@@ -135,25 +135,32 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
     return spans
 
 
-def without_tree(geo: GeoArrays) -> GeoArrays:
-    """``geo`` with an empty primitive tree (its arrays cut to length 0: the same types), for rays that cannot
-    cross the tree's root box (:func:`tree_spans`)."""
-    return geo._replace(pnode_min=geo.pnode_min[:0], pnode_max=geo.pnode_max[:0], pnode_first=geo.pnode_first[:0],
-                        pnode_count=geo.pnode_count[:0], pnode_prims=geo.pnode_prims[:0])
+@njit(cache=True, fastmath=False)
+def without_tree(geo):
+    """``geo`` (:class:`~vlref.geometry.scene_geometry.GeoArrays`) with an empty primitive tree (its five arrays cut
+    to length 0: the same types), for rays that cannot cross the tree's root box (:func:`tree_spans`). Made by the
+    rows' work from the one geometry the kernel takes: a second tuple of 22 arrays among the kernel's arguments cost
+    its compile ~1.5 s (the CPython wrapper and the ``prange``'s gufunc unbox and pass every array; BENCHMARKS.md
+    "The ray cast's launcher takes the geometry once")."""
+    return GeoArrays(geo.prim_kind, geo.prim_obj, geo.prim_row, geo.lin_prims, geo.pnode_min[:0], geo.pnode_max[:0],
+                     geo.pnode_first[:0], geo.pnode_count[:0], geo.pnode_prims[:0], geo.albedo, geo.emission,
+                     geo.opacity, geo.tint, geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0,
+                     geo.e1, geo.e2, geo.tri_obj, geo.tri_opaque)
 
 
 @njit(cache=True, fastmath=False, by_address=True)
-def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id):
+def _cast_rows(taken, geo, spans, origin, dirs, forward, far, depth, distance, normal, object_id):
     """Rows taken one at a time (:func:`vlref.parallel.take`) until none is left: each row's rays cast together
-    (:func:`closest_hits`; those outside the row's span of :func:`tree_spans` against ``outside``, the geometry
-    without its primitive tree), then its G-buffer pixels written (module docstring). The arrays are borrowed
-    (:func:`vlref.parallel.borrowed`)."""
+    (:func:`closest_hits`; those outside the row's span of :func:`tree_spans` against the geometry without its
+    primitive tree, :func:`without_tree`), then its G-buffer pixels written (module docstring). The arrays are
+    borrowed (:func:`vlref.parallel.borrowed`)."""
     h, w = depth.shape
     y = take(taken)
     if y >= h:  # before any allocation: a worker may find no row left
         return
-    geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
-        (geo, outside, spans, origin, dirs, forward, depth, distance, normal, object_id))
+    geo, spans, origin, dirs, forward, depth, distance, normal, object_id = borrowed(
+        (geo, spans, origin, dirs, forward, depth, distance, normal, object_id))
+    outside = without_tree(geo)
     ox, oy, oz = origin[0], origin[1], origin[2]
     origins, cos_f, tmax = np.empty((w, 3)), np.empty(w), np.empty(w)
     t_row, obj_row, n_row = np.empty(w), np.empty(w, dtype=np.int64), np.empty((w, 3))
@@ -187,14 +194,13 @@ def _cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, di
 
 
 @njit(cache=True, fastmath=False, parallel=True)
-def _raycast_kernel(geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows,
-                    workers):
+def _raycast_kernel(geo, spans, origin, dirs, forward, far, depth, distance, normal, object_id, cast_rows, workers):
     """The G-buffer: each of ``workers`` workers (one per thread, :func:`vlref.parallel.workers`) casts the rows it takes
     (``cast_rows``: :func:`_cast_rows` by address, :func:`vlref.parallel.work`), which borrows the arrays (module
     docstring, "Performance")."""
     taken = task_counter()
     for _ in prange(workers):
-        cast_rows(taken, geo, outside, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
+        cast_rows(taken, geo, spans, origin, dirs, forward, far, depth, distance, normal, object_id)
 
 
 def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
@@ -220,8 +226,8 @@ def raycast(scene: Scene, camera: Camera, geometry: Geometry | None = None,
 
 def kernel_args(geo: GeoArrays, camera: Camera, buf: GBuffer) -> tuple:
     """The ray-cast kernel's arguments but its work and workers (``_raycast_kernel(*args, work(_cast_rows, COUNTER,
-    *args), workers)`` fills ``buf``): the geometry with and without its primitive tree, :func:`tree_spans`, the
-    rays, the far plane, the stored buffers."""
-    return (geo, without_tree(geo), tree_spans(geo, buf.origin, buf.directions), buf.origin, buf.directions,
+    *args), workers)`` fills ``buf``): the geometry, :func:`tree_spans`, the rays, the far plane, the stored
+    buffers."""
+    return (geo, tree_spans(geo, buf.origin, buf.directions), buf.origin, buf.directions,
             np.ascontiguousarray(camera.forward, dtype=np.float64), float(camera.far), buf.depth, buf.distance,
             buf.normal, buf.object_id)
