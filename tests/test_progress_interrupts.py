@@ -421,7 +421,7 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
     from vlref.lights.shadow_cast import _cast_chunks
     from vlref.march.physical import _march_tasks
     from vlref.post.composite import _sum_composite
-    from vlref.ahead import AHEAD, compile_stage, stage_cached
+    from vlref.ahead import AHEAD, compile_composite, compile_stage, stage_cached
 
     scene = load_scene(scene_name, ["render.width=8", "render.height=5", "render.steps=2", *extra])
     render(scene)
@@ -437,3 +437,5 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
         assert {k: set(k.signatures) for k in after_march} == after_march, stage
         if stage == "march" or kernel.signatures:  # cache=True wrote it; the render command then starts no process
             assert stage_cached(stage, scene), stage
+    compile_composite(scene)  # the march's buffers' composite, compiled by the main process meanwhile
+    assert {k: set(k.signatures) for k in after_march} == after_march

@@ -3,11 +3,13 @@
 Without a warm-up (:mod:`vlref.warmup`), ``vlref render`` spreads its compile over processes: while the
 main process compiles the BVH build, second processes compile, each for the scene's types, the kernels of a
 later stage on a 1×1 frame that needs no earlier stage's kernel (no objects, no shadow maps but the stage's
-own, a G-buffer of sky: the same array types, empty): the march (with the composite of its buffers), the shadow
-maps, the ray cast, the surface shading, in that order of priority, one process per core beyond the first (on
-two cores the march alone: with the shadow maps too, that process became the longer one, BENCHMARKS.md "Cold
-first render on two cores"). The main process picks each up from the cache when it reaches that stage
-(:class:`vlref.render.Frame` ticks each stage as it ends; the next one waits for its process). The 1×1 frame
+own, a G-buffer of sky: the same array types, empty): the march, the shadow maps, the ray cast, the surface
+shading, in that order of priority, one process per core beyond the first (on two cores the march alone: with the
+shadow maps too, that process became the longer one, BENCHMARKS.md "Cold first render on two cores"). The main
+process picks each up from the cache when it reaches that stage (:class:`vlref.render.Frame` ticks each stage as it
+ends; the next one waits for its process). The march's process, the longest, compiles the march alone: the composite
+of its buffers (:func:`compile_composite`) is compiled by the main process while it waits for that process
+(BENCHMARKS.md "The ray cast's launcher takes the geometry once"). The 1×1 frame
 keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
 (:func:`vlref.march.physical.march_physical`). Cold, the
 default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s
@@ -56,7 +58,7 @@ from .processes import declare_own_kernels_only, host_cores, ignoring_sigint
 from .techniques import resolved
 from .techniques.physical import march_buffers
 
-__all__ = ["compile_ahead", "compile_stage", "stage_cached", "AHEAD", "spawn_context"]
+__all__ = ["compile_ahead", "compile_stage", "compile_composite", "stage_cached", "AHEAD", "spawn_context"]
 
 
 def spawn_context():
@@ -110,11 +112,19 @@ def compile_stage(stage: str, scene) -> None:
         scene_colour(_sky_gbuffer(), bare, geometry, lights)
     elif stage == "shadow maps":
         build_shadow_maps(bare, camera, geometry, lights)
-    else:  # the march, and what the technique does with its buffers (vlref.techniques.physical.render)
+    else:  # the march (its buffers' composite: compile_composite)
         maps = build_shadow_maps(bare, camera, geometry, lights)
-        per_light, trans = march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays,
-                                         resolved(scene, "steps"), resolved(scene, "sampling"))
-        sum_and_composite(per_light, np.zeros((1, 1, 3)), trans)
+        march_buffers(bare, camera, np.full((1, 1), np.inf), lights, maps, geometry.arrays, resolved(scene, "steps"),
+                      resolved(scene, "sampling"))
+
+
+def compile_composite(scene) -> None:
+    """Compile (or load) what the physical technique does with the march's buffers, :func:`sum_and_composite`, for
+    ``scene``'s types on 1×1 arrays: the buffers (one per light; none, no kernel) and the transmittance in the
+    march's precision, the scene colour in float64."""
+    count = pack_lights(_bare(scene)).count
+    dtype = np.float32 if scene.render.precision == "float32" else np.float64
+    sum_and_composite(np.zeros((count, 1, 1, 3), dtype), np.zeros((1, 1, 3)), np.ones((1, 1), dtype))
 
 
 def _compile_stage_process(stage: str, scene) -> None:
@@ -235,8 +245,9 @@ def _load(functions: list[tuple]) -> None:
 def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs, and load the
     cached ones on a thread (module docstring); yields ``ready(tick)``, to be called with each render tick: it
-    waits for the process compiling the stage that comes next. A no-op on one core. The processes are terminated
-    when the block exits early (an error, an interrupt); the thread ends with its current load."""
+    waits for the process compiling the stage that comes next (before the march's, it compiles the composite of the
+    march's buffers, :func:`compile_composite`). A no-op on one core. The processes are terminated when the block
+    exits early (an error, an interrupt); the thread ends with its current load."""
     procs = {}
     cold = _stages_ahead(scene)
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
@@ -252,6 +263,8 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
 
     def ready(tick: str) -> None:
         if tick in procs:
+            if tick == AHEAD["march"][0] and "march" in cold:
+                compile_composite(scene)
             procs[tick].join()
 
     try:
