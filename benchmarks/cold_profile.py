@@ -82,9 +82,9 @@ def _rows_and_sums(cpu: float, wall: float) -> dict:
     return {"rows": rows, "cpu_s": cpu, "wall_s": wall}
 
 
-def _profiled_stage_process(stage: str, scene) -> None:
+def _profiled_stage_process(stage: str, scene, composite_claim=None) -> None:
     """``vlref.ahead``'s process, profiled; its rows written to ``$VLREF_COLD_PROFILE.ahead-STAGE``."""
-    from vlref.ahead import compile_stage
+    from vlref.ahead import _compile_composite_unless_claimed, compile_stage
     from vlref.jit_init import initialise_numba
     from vlref.processes import declare_own_kernels_only
     start_cpu, start = time.process_time(), time.perf_counter()
@@ -92,6 +92,7 @@ def _profiled_stage_process(stage: str, scene) -> None:
     initialise_numba(compiling=True)
     _install()
     compile_stage(stage, scene)
+    _compile_composite_unless_claimed(composite_claim, scene)
     with open(f"{os.environ['VLREF_COLD_PROFILE']}.ahead-{stage}", "w") as fh:
         json.dump(_rows_and_sums(time.process_time() - start_cpu, time.perf_counter() - start), fh, indent=1)
 

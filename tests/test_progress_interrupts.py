@@ -439,3 +439,59 @@ def test_each_stage_compiled_ahead_has_the_types_the_real_frame_calls(scene_name
             assert stage_cached(stage, scene), stage
     compile_composite(scene)  # the march's buffers' composite, compiled by the main process meanwhile
     assert {k: set(k.signatures) for k in after_march} == after_march
+
+
+class _Started:
+    """A compile-ahead process that runs nothing (``compile_ahead``'s bookkeeping alone): alive until joined."""
+    made = []
+
+    def __init__(self, target, args, daemon):
+        self.args, self.alive = args, True
+        _Started.made.append(self)
+
+    def start(self):
+        pass
+
+    def is_alive(self):
+        return self.alive
+
+    def join(self):
+        self.alive = False
+
+    def terminate(self):
+        self.alive = False
+
+
+@pytest.mark.parametrize("first", ["main", "march", "neither"])
+def test_the_marchs_composite_is_compiled_once_by_the_process_that_gets_to_it_first(monkeypatch, first):
+    """A cold render's composite of the march's buffers is compiled by the main process when it reaches the march
+    while the march's process runs (``ready``), or by that process after the march, whichever takes the claim first;
+    a process already ended leaves it to the render's own call."""
+    import vlref.ahead as ahead
+
+    compiled, caller = [], ["main"]
+    monkeypatch.setattr(ahead, "compile_composite", lambda scene: compiled.append((caller[0], scene)))
+
+    def march_process_claims():  # what the march's process does after the march
+        caller[0] = "march"
+        ahead._compile_composite_unless_claimed(claim, scene)
+        caller[0] = "main"
+
+    monkeypatch.setattr(ahead, "_stages_ahead", lambda scene: ["march"])
+    monkeypatch.setattr(ahead, "host_cores", lambda: 2)
+    monkeypatch.setattr(ahead, "_to_load_ahead", lambda scene, cold: [])
+    monkeypatch.setattr(ahead.multiprocessing.context.SpawnContext, "Process", _Started)
+    _Started.made.clear()
+    scene = load_scene("pillars")
+    with ahead.compile_ahead(scene) as ready:
+        (march,) = _Started.made
+        stage, _, claim = march.args
+        assert stage == "march" and claim is not None
+        if first == "march":
+            march_process_claims()
+        if first == "neither":  # that process ended without taking it
+            march.alive = False
+        ready(ahead.AHEAD["march"][0])  # the main process, done with the shadow maps
+        if first == "main":  # the march's process comes later: claimed already
+            march_process_claims()
+    assert compiled == ([] if first == "neither" else [(first, scene)])

@@ -7,9 +7,11 @@ own, a G-buffer of sky: the same array types, empty): the march, the shadow maps
 shading, in that order of priority, one process per core beyond the first (on two cores the march alone: with the
 shadow maps too, that process became the longer one, BENCHMARKS.md "Cold first render on two cores"). The main
 process picks each up from the cache when it reaches that stage (:class:`vlref.render.Frame` ticks each stage as it
-ends; the next one waits for its process). The march's process, the longest, compiles the march alone: the composite
-of its buffers (:func:`compile_composite`) is compiled by the main process while it waits for that process
-(BENCHMARKS.md "The ray cast's launcher takes the geometry once"). The 1×1 frame
+ends; the next one waits for its process). The composite of the march's buffers (:func:`compile_composite`) is
+compiled by whichever of the main process and the march's process gets to it first: the march's process after the
+march, the main process when it reaches the march while that process still runs (a lock, taken once: on the device's
+two cores the main process got there first, on the 2-core dev box the march's process; BENCHMARKS.md "The ray
+cast's launcher takes the geometry once"). The 1×1 frame
 keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
 (:func:`vlref.march.physical.march_physical`). Cold, the
 default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s
@@ -127,15 +129,26 @@ def compile_composite(scene) -> None:
     sum_and_composite(np.zeros((count, 1, 1, 3), dtype), np.zeros((1, 1, 3)), np.ones((1, 1), dtype))
 
 
-def _compile_stage_process(stage: str, scene) -> None:
+def _compile_composite_unless_claimed(claim, scene) -> None:
+    """:func:`compile_composite` of ``scene`` where this process takes ``claim`` first (a lock of
+    :func:`compile_ahead`'s, taken once and never released: the main process or the march's, whichever comes first,
+    compiles the composite); nothing where ``claim`` is None or taken."""
+    if claim is not None and claim.acquire(False):  # without blocking
+        compile_composite(scene)
+
+
+def _compile_stage_process(stage: str, scene, composite_claim=None) -> None:
     """What a process of :func:`compile_ahead` runs: :func:`compile_stage`, in a process that runs vlref's kernels
     alone (:func:`vlref.processes.declare_own_kernels_only`), with Numba initialised first as ``vlref render``'s own
     process initialises it (:func:`vlref.jit_init.initialise_numba`: without ``scipy.linalg``, cffi and the extension
     scan; on the dev box its first compile began 0.31 s after its frame was set up, 0.12 + 0.04 s with it). That
-    process starts behind the main one (its interpreter, its imports), and the main process waits for it."""
+    process starts behind the main one (its interpreter, its imports), and the main process waits for it. With
+    ``composite_claim`` (the march's process), then the composite of the march's buffers, unless the main process
+    claimed it first (:func:`_compile_composite_unless_claimed`)."""
     declare_own_kernels_only()
     initialise_numba(compiling=True)
     compile_stage(stage, scene)
+    _compile_composite_unless_claimed(composite_claim, scene)
 
 
 def _march_wanted(dtype, rays: bool):
@@ -245,15 +258,16 @@ def _load(functions: list[tuple]) -> None:
 def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs, and load the
     cached ones on a thread (module docstring); yields ``ready(tick)``, to be called with each render tick: it
-    waits for the process compiling the stage that comes next (before the march's, it compiles the composite of the
-    march's buffers, :func:`compile_composite`). A no-op on one core. The processes are terminated when the block
+    waits for the process compiling the stage that comes next (for the march's, while it still runs, it compiles
+    the composite of the march's buffers unless that process has claimed it). A no-op on one core. The processes are terminated when the block
     exits early (an error, an interrupt); the thread ends with its current load."""
     procs = {}
     cold = _stages_ahead(scene)
+    claim = spawn_context().Lock() if "march" in cold else None  # the composite's: module docstring
     with ignoring_sigint():  # Ctrl-C reaches the workers too: the parent alone handles it (vlref.processes)
         for stage in cold:
-            procs[AHEAD[stage][0]] = spawn_context().Process(target=_compile_stage_process, args=(stage, scene),
-                                                             daemon=True)
+            args = (stage, scene, claim if stage == "march" else None)
+            procs[AHEAD[stage][0]] = spawn_context().Process(target=_compile_stage_process, args=args, daemon=True)
             procs[AHEAD[stage][0]].start()
     loading = None
     if host_cores() > 1:
@@ -263,8 +277,8 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
 
     def ready(tick: str) -> None:
         if tick in procs:
-            if tick == AHEAD["march"][0] and "march" in cold:
-                compile_composite(scene)
+            if tick == AHEAD["march"][0] and procs[tick].is_alive():
+                _compile_composite_unless_claimed(claim, scene)
             procs[tick].join()
 
     try:
