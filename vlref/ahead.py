@@ -9,9 +9,8 @@ shadow maps too, that process became the longer one, BENCHMARKS.md "Cold first r
 process picks each up from the cache when it reaches that stage (:class:`vlref.render.Frame` ticks each stage as it
 ends; the next one waits for its process). The composite of the march's buffers (:func:`compile_composite`) is
 compiled by whichever of the main process and the march's process gets to it first: the march's process after the
-march, the main process when it reaches the march while that process still runs (a lock, taken once: on the device's
-two cores the main process got there first, on the 2-core dev box the march's process; BENCHMARKS.md "The ray
-cast's launcher takes the geometry once"). The 1×1 frame
+march, the main process when it reaches the march while that process still runs (a lock, taken once), so neither
+waits for the other's share (BENCHMARKS.md "The ray cast's launcher takes the geometry once"). The 1×1 frame
 keeps the lights' ``exact`` shadows, which choose the march's variant with the shadow-ray tracer
 (:func:`vlref.march.physical.march_physical`). Cold, the
 default scene rendered in 23–24 s on the idle 2-core dev box of 2026-11-25 with the march alone ahead (37–43 s

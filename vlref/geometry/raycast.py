@@ -139,9 +139,9 @@ def tree_spans(geo: GeoArrays, origin: np.ndarray, dirs: np.ndarray) -> np.ndarr
 def without_tree(geo):
     """``geo`` (:class:`~vlref.geometry.scene_geometry.GeoArrays`) with an empty primitive tree (its five arrays cut
     to length 0: the same types), for rays that cannot cross the tree's root box (:func:`tree_spans`). Made by the
-    rows' work from the one geometry the kernel takes: a second tuple of 22 arrays among the kernel's arguments cost
-    its compile ~1.5 s (the CPython wrapper and the ``prange``'s gufunc unbox and pass every array; BENCHMARKS.md
-    "The ray cast's launcher takes the geometry once")."""
+    rows' work from the one geometry the kernel takes: a second tuple of 22 arrays among the kernel's arguments made
+    the ray cast's compile 1-2.5 s longer (the CPython wrapper and the ``prange``'s gufunc unbox and pass every
+    array; BENCHMARKS.md "The ray cast's launcher takes the geometry once")."""
     return GeoArrays(geo.prim_kind, geo.prim_obj, geo.prim_row, geo.lin_prims, geo.pnode_min[:0], geo.pnode_max[:0],
                      geo.pnode_first[:0], geo.pnode_count[:0], geo.pnode_prims[:0], geo.albedo, geo.emission,
                      geo.opacity, geo.tint, geo.node_min, geo.node_max, geo.node_first, geo.node_count, geo.v0,
