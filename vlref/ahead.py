@@ -121,11 +121,10 @@ def compile_stage(stage: str, scene) -> None:
 
 def compile_composite(scene) -> None:
     """Compile (or load) what the physical technique does with the march's buffers, :func:`sum_and_composite`, for
-    ``scene``'s types on 1×1 arrays: the buffers (one per light; none, no kernel) and the transmittance in the
-    march's precision, the scene colour in float64."""
-    count = pack_lights(_bare(scene)).count
+    ``scene``'s types on 1×1 arrays: the buffers (one per light, as :func:`~vlref.lights.pack_lights` packs them;
+    none, no kernel) and the transmittance in the march's precision, the scene colour in float64."""
     dtype = np.float32 if scene.render.precision == "float32" else np.float64
-    sum_and_composite(np.zeros((count, 1, 1, 3), dtype), np.zeros((1, 1, 3)), np.ones((1, 1), dtype))
+    sum_and_composite(np.zeros((len(scene.lights), 1, 1, 3), dtype), np.zeros((1, 1, 3)), np.ones((1, 1), dtype))
 
 
 def _compile_composite_unless_claimed(claim, scene) -> None:
@@ -258,8 +257,8 @@ def compile_ahead(scene) -> Iterator[Callable[[str], None]]:
     """Compile the cold kernels of ``scene``'s later stages in second processes while the block runs, and load the
     cached ones on a thread (module docstring); yields ``ready(tick)``, to be called with each render tick: it
     waits for the process compiling the stage that comes next (for the march's, while it still runs, it compiles
-    the composite of the march's buffers unless that process has claimed it). A no-op on one core. The processes are terminated when the block
-    exits early (an error, an interrupt); the thread ends with its current load."""
+    the composite of the march's buffers unless that process has claimed it). A no-op on one core. The processes
+    are terminated when the block exits early (an error, an interrupt); the thread ends with its current load."""
     procs = {}
     cold = _stages_ahead(scene)
     claim = spawn_context().Lock() if "march" in cold else None  # the composite's: module docstring
