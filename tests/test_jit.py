@@ -1,5 +1,6 @@
-"""vlref.jit.njit: Numba's njit with only the wrappers vlref calls. A helper (compiled code calls it) has no wrapper,
-and a call from Python reaches it through its Python entry, a compile of its own under its own name and cache entry;
+"""vlref.jit.njit: Numba's njit with only the wrappers vlref calls. A helper (compiled code calls it) has no wrapper
+and no machine code (its callers link its optimised module; cached as bitcode), and a call from Python reaches it
+through its Python entry, a compile of its own under its own name and cache entry;
 an entry point (``entry=True`` or ``parallel=True``: Python calls it) keeps its CPython wrapper and has no C wrapper; a
 work function (``by_address=True``) has its C wrapper (vlref.parallel.work calls it through its address) and no
 CPython wrapper; the function's own optimised code is Numba's; every compiled function of vlref is made by it."""
@@ -22,7 +23,7 @@ import vlref
 from vlref.phase import hg
 from vlref.render import render
 from vlref.scene import load_scene
-from vlref.jit import PYTHON_ENTRY_SUFFIX, CompiledCallersDispatcher, njit
+from vlref.jit import PYTHON_ENTRY_SUFFIX, CompiledCallersDispatcher, LinkOnlyLibrary, njit
 from vlref.parallel import COUNTER, WORKERS, take, task_counter, work
 
 
@@ -82,7 +83,34 @@ def test_a_helper_has_no_wrapper_and_python_calls_it_through_its_python_entry():
     assert caller(cos_theta, 0.5) == numbas(cos_theta, 0.5)  # from compiled code: the helper's own compile
     assert len(ours.signatures) == 1
     assert _entry(ours, "llvm_cpython_wrapper_name") == 0 and _entry(ours, "llvm_cfunc_wrapper_name") == 0
-    assert _body(ours) == _body(numbas)  # the same code, no wrapper
+    assert _no_wrapper(_body(ours))
+
+
+def _no_wrapper(body: str) -> bool:
+    """Whether an optimised function body (:func:`_body`) is the function itself: it calls no wrapper."""
+    return body.startswith("; Function Attrs") and "wrapper" not in body and "define" in body
+
+
+def test_a_helper_is_compiled_without_machine_code_and_its_callers_link_its_optimised_module():
+    """Compiled code calls a helper's code linked into its own module, never the helper's machine code: the helper
+    is compiled into a LinkOnlyLibrary, optimised as Numba optimises it and never given to the JIT engine."""
+    cos_theta = np.linspace(-1.0, 1.0, 101)
+    ours = njit(_phase_sum)
+    sig = (numba.typeof(cos_theta), numba.float64)
+    ours.compile(sig)
+    result = ours.overloads[sig]
+    engine = result.library._codegen._engine
+    assert isinstance(result.library, LinkOnlyLibrary) and result.library._finalized
+    assert not engine.is_symbol_defined(result.fndesc.mangled_name)  # no machine code
+    assert _no_wrapper(_body(ours)) and "fdiv double" in _body(ours)  # its optimised module, for linking
+
+    @numba.njit
+    def caller(c, g):
+        return ours(c, g)
+
+    assert caller(cos_theta, 0.25) == numba.njit(_phase_sum)(cos_theta, 0.25)
+    assert engine.is_symbol_defined(caller.overloads[caller.signatures[0]].fndesc.mangled_name)
+    assert ours.overloads[sig] is result  # the caller linked the helper's compile, not a new one
 
 
 _CACHED_HELPER = """
@@ -103,14 +131,16 @@ def caller(a):
 
 
 a = np.arange(10.0)
-print(caller(a) if sys.argv[1] == "compiled" else helper(a), len(helper.signatures))
+value = caller(a) if sys.argv[1] == "compiled" else helper(a)
+print(value, len(helper.signatures), sum(helper.stats.cache_hits.values()))
 """
 
 
-def test_a_python_call_never_finds_the_helpers_cache_entry_without_wrapper(tmp_path):
-    """Numba's cache keys an entry by signature and code only: a helper compiled for a compiled caller and cached
-    (no wrapper) must not be what a later process's Python call loads (it would be called through address 0), in
-    this version of vlref or in one that compiles every wrapper."""
+def test_a_helper_is_cached_as_bitcode_apart_from_its_python_entry_and_from_plain_numba(tmp_path):
+    """A helper compiled for a compiled caller is cached as the module its callers link (bitcode, no machine code),
+    which a later process's compile links without compiling the helper again; Numba's cache keys an entry by
+    signature and code only, so that entry must never be what a Python call loads (its Python entry has a name and
+    entry of its own), nor what a version of vlref that compiles every wrapper (plain Numba) loads, nor the reverse."""
     (tmp_path / "cached_helper.py").write_text(textwrap.dedent(_CACHED_HELPER))
     env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "cache"),
                PYTHONPATH=os.pathsep.join([str(Path(vlref.__file__).parents[1]), os.environ.get("PYTHONPATH", "")]))
@@ -121,15 +151,16 @@ def test_a_python_call_never_finds_the_helpers_cache_entry_without_wrapper(tmp_p
         assert proc.returncode == 0, proc.stderr[-2000:]
         return proc.stdout.split()
 
-    assert run("compiled") == ["22.5", "1"]  # the helper compiled without wrapper, into the cache
-    assert run("python") == ["22.5", "0"]  # a fresh process: the Python entry, its own compile and cache entry
-    assert run("python") == ["22.5", "0"]  # its cache entry
+    assert run("compiled") == ["22.5", "1", "0"]  # the helper compiled without wrapper and machine code, cached
+    assert run("compiled") == ["22.5", "1", "1"]  # a fresh process: the caller links the cached helper
+    assert run("python") == ["22.5", "0", "0"]  # the Python entry, its own compile and cache entry
+    assert run("python") == ["22.5", "0", "0"]  # its cache entry
     indexes = sorted(p.name.split("-")[0] for p in (tmp_path / "cache").rglob("*.nbi"))
     assert indexes == ["cached_helper.helper", "cached_helper.helper" + PYTHON_ENTRY_SUFFIX]
     # a version of vlref that compiles the helper with its wrappers (plain Numba), on the same unchanged source and
-    # cache, never loads the entry without them (vlref.jit.WithoutWrappersCache): it compiles its own and runs
-    assert run("python", "plain") == ["22.5", "1"]
-    assert run("compiled") == ["22.5", "1"]  # and this version still finds its own entry beside that one
+    # cache, never loads the bitcode entry (vlref.jit.LinkOnlyCache): it compiles its own and runs
+    assert run("python", "plain") == ["22.5", "1", "0"]
+    assert run("compiled") == ["22.5", "1", "1"]  # and this version still finds its own entry beside that one
 
 
 def test_a_work_function_has_its_c_wrapper_and_no_python_entry():
