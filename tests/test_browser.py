@@ -243,8 +243,13 @@ def _explorer_image(page) -> np.ndarray:
     """The explorer's figure as painted on the page (RGB), once it is decoded and painted (not blank)."""
     from PIL import Image
 
-    page.wait_for_function(f"(() => {{ const all = document.querySelectorAll({IMAGE!r}); const e = all[all.length - 1];"
-                           f" return e && e.complete && e.naturalWidth > 0; }})()", timeout=90_000)
+    shown = (f"(() => {{ const all = document.querySelectorAll({IMAGE!r}); const e = all[all.length - 1];"
+             f" return e && e.complete && e.naturalWidth > 0; }})()")
+    deadline = time.monotonic() + 90
+    while not page.evaluate(shown):
+        assert time.monotonic() < deadline, (f"no figure after 90 s; images: {page.locator(IMAGE).count()}; "
+                                             "notebook: " + page.locator(".jp-Notebook").inner_text()[-1500:])
+        page.wait_for_timeout(500)
     image = page.locator(IMAGE).last
     image.evaluate("e => e.decode()")
     image.scroll_into_view_if_needed()
@@ -257,25 +262,37 @@ def _explorer_image(page) -> np.ndarray:
         time.sleep(0.2)
 
 
-RENDERED = "document.querySelector('.jp-Notebook').innerText.includes('render #1:')"
-"""The explorer printed its first render's line."""
+RENDERED = ("document.querySelector('.jp-Notebook').innerText.includes('render #1:') && "
+            "document.querySelector('.jp-Notebook .widget-slider') !== null")
+"""The explorer printed its first render's line and its sliders are on the page (under load JupyterLab's widget
+manager now and then misses the widgets' model, "Error displaying widget: model not found", and shows none)."""
 
-STALLED = ("document.querySelector('.jp-Notebook-ExecutionIndicator[data-status=idle]') !== null && "
-           "[...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')].some(e => e.textContent.trim() === '[ ]:')")
-"""The kernel is idle and a code cell has not run: a "Run All" was lost or stopped early."""
+STATUS = "(document.querySelector('.jp-Notebook-ExecutionIndicator') || {dataset: {}}).dataset.status || 'none'"
+"""The notebook's execution indicator: ``idle``, ``busy``, or the kernel's state while it connects or restarts."""
+
+PROMPTS = ("[...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')].map(e => e.textContent.trim())"
+           ".join(' ')")
+"""The code cells' prompts that the page shows (``[ ]:`` not run, ``[*]:`` queued or running, ``[n]:`` run)."""
 
 STALL_SECONDS = 15.0
 
 
-def _run_all_until_rendered(page, seconds: float = 120.0) -> int:
+def _run_all_until_rendered(page, seconds: float = 240.0) -> int:
     """Run All Cells, and run them again while JupyterLab stalls, until the explorer's first render shows.
 
     JupyterLab drops a "Run All" sent while the kernel is still connecting, and now and then runs only the first
     cell of it (on a loaded 2-core box: 2 of 5 runs timed out before this loop, 4 of 7 needed it since): the
     kernel goes idle with the other cells never run, no error anywhere (the notebook runs whole under nbmake).
-    So the page is polled, and "Run All" is sent again once the kernel has sat idle for ``STALL_SECONDS`` with a
-    code cell that has not run. Returns how many times it was sent; fails with the notebook's text when the
-    render does not show within ``seconds``."""
+    So the page is polled, and "Run All" is sent again once the kernel has not been busy for ``STALL_SECONDS``
+    without the render (:data:`RENDERED`): the explorer's first render runs in its cell's execution, so a kernel
+    not busy and no render means the cells were not all run or their widgets were not shown; running them again
+    makes new ones, after a reload of the page where it shows "Error displaying widget" (running again in that page
+    showed the error again, 14 times in 240 s) or its kernel's state is neither idle nor busy ("unknown" for 240 s
+    once, every cell not run).
+    (Until 2026-11-28 the resend also asked for a code cell whose prompt shows ``[ ]:``, and the render was its line
+    alone: a CI run waited 120 s with one send, and under load a render showed "model not found" in place of its
+    widgets.) Returns how many times it was sent; fails with the kernel's state, the prompts and the notebook's text
+    when the render does not show within ``seconds``."""
     def run_all():
         page.get_by_role("menuitem", name="Run", exact=True).click()
         page.get_by_role("menuitem", name="Run All Cells", exact=True).click()
@@ -285,10 +302,16 @@ def _run_all_until_rendered(page, seconds: float = 120.0) -> int:
     sent, stalled_since = 1, None
     while not page.evaluate(RENDERED):
         now = time.monotonic()
-        assert now < deadline, f"no render after {seconds:.0f} s and {sent} Run All: " + \
-            page.locator(".jp-Notebook").inner_text()[-2000:]
-        stalled_since = (stalled_since or now) if page.evaluate(STALLED) else None
+        assert now < deadline, (f"no render after {seconds:.0f} s and {sent} Run All; kernel "
+                                f"{page.evaluate(STATUS)}; prompts: {page.evaluate(PROMPTS)}; notebook: "
+                                + page.locator(".jp-Notebook").inner_text()[-2000:])
+        status = page.evaluate(STATUS)
+        stalled_since = (stalled_since or now) if status != "busy" else None
         if stalled_since is not None and now - stalled_since > STALL_SECONDS:
+            if status != "idle" or "Error displaying widget" in page.locator(".jp-Notebook").inner_text():
+                page.reload()   # the page lost its kernel's connection or its widgets' models: a new page has both
+                page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
+                page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=120_000)
             run_all()
             sent, stalled_since = sent + 1, None
         page.wait_for_timeout(500)
