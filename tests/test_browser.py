@@ -277,6 +277,12 @@ PROMPTS = ("[...document.querySelectorAll('.jp-CodeCell .jp-InputPrompt')].map(e
 STALL_SECONDS = 15.0
 
 
+def _until_ready(page) -> None:
+    """Wait until the notebook's cells are on the page and its kernel is idle."""
+    page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
+    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=120_000)
+
+
 def _run_all_until_rendered(page, seconds: float = 240.0) -> int:
     """Run All Cells, and run them again while JupyterLab stalls, until the explorer's first render shows.
 
@@ -310,8 +316,7 @@ def _run_all_until_rendered(page, seconds: float = 240.0) -> int:
         if stalled_since is not None and now - stalled_since > STALL_SECONDS:
             if status != "idle" or "Error displaying widget" in page.locator(".jp-Notebook").inner_text():
                 page.reload()   # the page lost its kernel's connection or its widgets' models: a new page has both
-                page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
-                page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=120_000)
+                _until_ready(page)
             run_all()
             sent, stalled_since = sent + 1, None
         page.wait_for_timeout(500)
@@ -322,8 +327,7 @@ def test_explorer_slider_rerenders(browser, jupyter):
     start = time.monotonic()
     page = browser.new_page(viewport={"width": 1280, "height": 1500})
     page.goto(f"{jupyter}/lab/tree/{EXPLORER.name}?token={TOKEN}")
-    page.wait_for_selector(".jp-Notebook .jp-Cell", timeout=120_000)
-    page.wait_for_selector(".jp-Notebook-ExecutionIndicator[data-status=idle]", timeout=120_000)
+    _until_ready(page)
     _run_all_until_rendered(page)
     assert _render_count(page) == 1
     before = _explorer_image(page)

@@ -21,9 +21,10 @@ calls a compiled function in one of three ways, and this ``njit`` compiles for e
   only ``vlref.parallel.work`` takes such a function.
 
 The function's own optimised code, and so every result, is the one it was with both wrappers (a wrapper only calls
-it; tests/test_jit.py compares the compiled bodies of an entry point and of a work function with Numba's). The C wrappers were about a tenth of a cold render's
-compile (BENCHMARKS.md "A cold render compiles fewer wrappers and parfors"), the helpers' CPython wrappers another
-tenth (BENCHMARKS.md "The cold first render: no Python entry for the helpers").
+it; tests/test_jit.py compares the compiled bodies of an entry point and of a work function with Numba's). The C
+wrappers were about a tenth of a cold render's compile (BENCHMARKS.md "A cold render compiles fewer wrappers and
+parfors"), the helpers' CPython wrappers another tenth (BENCHMARKS.md "The cold first render: no Python entry for
+the helpers").
 
 **A helper has no machine code of its own.** Code that calls a helper never calls the helper's machine code: Numba
 links the helper's optimised LLVM module into the caller's module, where it is inlined or compiled anew with the
