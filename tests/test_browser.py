@@ -294,10 +294,7 @@ def _run_all_until_rendered(page, seconds: float = 240.0) -> int:
     not busy and no render means the cells were not all run or their widgets were not shown; running them again
     makes new ones, after a reload of the page where it shows "Error displaying widget" (running again in that page
     showed the error again, 14 times in 240 s) or its kernel's state is neither idle nor busy ("unknown" for 240 s
-    once, every cell not run).
-    (Until 2026-11-28 the resend also asked for a code cell whose prompt shows ``[ ]:``, and the render was its line
-    alone: a CI run waited 120 s with one send, and under load a render showed "model not found" in place of its
-    widgets.) Returns how many times it was sent; fails with the kernel's state, the prompts and the notebook's text
+    once, every cell not run). Returns how many times it was sent; fails with the kernel's state, the prompts and the notebook's text
     when the render does not show within ``seconds``."""
     def run_all():
         page.get_by_role("menuitem", name="Run", exact=True).click()
@@ -315,7 +312,7 @@ def _run_all_until_rendered(page, seconds: float = 240.0) -> int:
         stalled_since = (stalled_since or now) if status != "busy" else None
         if stalled_since is not None and now - stalled_since > STALL_SECONDS:
             if status != "idle" or "Error displaying widget" in page.locator(".jp-Notebook").inner_text():
-                page.reload()   # the page lost its kernel's connection or its widgets' models: a new page has both
+                page.reload()  # the page lost its kernel's connection or its widgets' models: a new page has both
                 _until_ready(page)
             run_all()
             sent, stalled_since = sent + 1, None
